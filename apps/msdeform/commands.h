@@ -1,0 +1,11 @@
+#pragma once
+// Each subcommand of the msdeform tool registers itself on the application here.
+
+#include <CLI/CLI.hpp>
+
+namespace msd::cli {
+
+void add_info_command(CLI::App& app);
+void add_scene_command(CLI::App& app);
+
+}  // namespace msd::cli

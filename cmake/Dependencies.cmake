@@ -1,0 +1,36 @@
+# Locates msdeform's Debian packages. Order matters: CGAL puts its own FindEigen3/FindOpenMesh modules
+# on the module path, so every other package is found first and in CONFIG mode (design.md §5).
+
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_package(OpenMesh REQUIRED CONFIG)
+find_package(TBB REQUIRED CONFIG)
+find_package(embree 3 REQUIRED CONFIG)
+find_package(CLI11 REQUIRED CONFIG)
+if(MSD_BUILD_TESTS)
+  find_package(Catch2 2 REQUIRED CONFIG)
+endif()
+
+# SuiteSparse 5.12 ships neither a CMake config nor a .pc file.
+find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
+find_library(CHOLMOD_LIBRARY cholmod)
+find_library(SUITESPARSE_CONFIG_LIBRARY suitesparseconfig)
+if(CHOLMOD_INCLUDE_DIR AND CHOLMOD_LIBRARY AND SUITESPARSE_CONFIG_LIBRARY)
+  add_library(msd_cholmod INTERFACE)
+  target_include_directories(msd_cholmod SYSTEM INTERFACE "${CHOLMOD_INCLUDE_DIR}")
+  target_link_libraries(msd_cholmod INTERFACE "${CHOLMOD_LIBRARY}" "${SUITESPARSE_CONFIG_LIBRARY}")
+  set(MSD_HAVE_CHOLMOD ON)
+  message(STATUS "msdeform: sparse Cholesky = CHOLMOD (${CHOLMOD_LIBRARY})")
+else()
+  set(MSD_HAVE_CHOLMOD OFF)
+  message(STATUS "msdeform: CHOLMOD not found, sparse Cholesky = Eigen SimplicialLDLT (slow on large meshes)")
+endif()
+
+# Debian's OpenSubdivConfig.cmake names a static library that is not shipped: locate Far by hand.
+find_path(OPENSUBDIV_INCLUDE_DIR opensubdiv/far/topologyRefiner.h)
+find_library(OPENSUBDIV_CPU_LIBRARY osdCPU)
+if(NOT OPENSUBDIV_INCLUDE_DIR OR NOT OPENSUBDIV_CPU_LIBRARY)
+  message(FATAL_ERROR "OpenSubdiv (libosd-dev) not found: run scripts/setup.sh")
+endif()
+add_library(msd_opensubdiv INTERFACE)
+target_include_directories(msd_opensubdiv SYSTEM INTERFACE "${OPENSUBDIV_INCLUDE_DIR}")
+target_link_libraries(msd_opensubdiv INTERFACE "${OPENSUBDIV_CPU_LIBRARY}")

@@ -1,0 +1,149 @@
+#include "core/laplacian.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "core/parallel.h"
+
+namespace msd {
+namespace {
+
+constexpr double kDegenerateAreaRatio = 1e-14;
+
+struct Corner {
+  Vec3 p[3];
+  double area2;  // twice the area
+  bool degenerate;
+};
+
+Corner corner(const Positions& P, const Faces& F, Eigen::Index f) {
+  Corner c;
+  for (int k = 0; k < 3; ++k) c.p[k] = P.row(F(f, k));
+  c.area2 = (c.p[1] - c.p[0]).cross(c.p[2] - c.p[0]).norm();
+  const double longest2 = std::max({(c.p[1] - c.p[0]).squaredNorm(), (c.p[2] - c.p[1]).squaredNorm(),
+                                    (c.p[0] - c.p[2]).squaredNorm()});
+  c.degenerate = !(c.area2 > 2 * kDegenerateAreaRatio * longest2);  // also catches NaN
+  return c;
+}
+
+}  // namespace
+
+CotanLaplacian cotan_laplacian(const Positions& P, const Faces& F) {
+  const int nv = static_cast<int>(P.rows());
+  CotanLaplacian out;
+  out.mass = Eigen::VectorXd::Zero(nv);
+  std::vector<Triplet> triplets;
+  triplets.reserve(F.rows() * 9);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Corner c = corner(P, F, f);
+    if (c.degenerate) {
+      ++out.degenerate_faces;
+      continue;
+    }
+    double cot[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 a = c.p[(k + 1) % 3] - c.p[k], b = c.p[(k + 2) % 3] - c.p[k];
+      cot[k] = a.dot(b) / c.area2;
+      if (std::abs(cot[k]) > CotanLaplacian::kMaxCotangent) {
+        cot[k] = std::copysign(CotanLaplacian::kMaxCotangent, cot[k]);
+        ++out.clamped_cotangents;
+      }
+    }
+    for (int k = 0; k < 3; ++k) {
+      // The angle at corner k is opposite the edge (k+1, k+2).
+      const int i = F(f, (k + 1) % 3), j = F(f, (k + 2) % 3);
+      const double w = 0.5 * cot[k];
+      triplets.emplace_back(i, j, w);
+      triplets.emplace_back(j, i, w);
+      triplets.emplace_back(i, i, -w);
+      triplets.emplace_back(j, j, -w);
+    }
+    // Mixed Voronoi areas.
+    const double area = 0.5 * c.area2;
+    const int obtuse = cot[0] < 0 ? 0 : cot[1] < 0 ? 1 : cot[2] < 0 ? 2 : -1;
+    for (int k = 0; k < 3; ++k) {
+      double a;
+      if (obtuse < 0) {
+        const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+        a = ((c.p[k1] - c.p[k]).squaredNorm() * cot[k2] + (c.p[k2] - c.p[k]).squaredNorm() * cot[k1]) / 8.0;
+      } else {
+        a = k == obtuse ? area / 2 : area / 4;
+      }
+      out.mass[F(f, k)] += a;
+    }
+  }
+  out.W.resize(nv, nv);
+  out.W.setFromTriplets(triplets.begin(), triplets.end());
+  return out;
+}
+
+SparseMatrix uniform_laplacian(const Faces& F, int num_vertices) {
+  std::vector<Triplet> triplets;
+  triplets.reserve(F.rows() * 6);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int i = F(f, k), j = F(f, (k + 1) % 3);
+      triplets.emplace_back(i, j, 1.0);
+      triplets.emplace_back(j, i, 1.0);
+    }
+  SparseMatrix adjacency(num_vertices, num_vertices);
+  // Each interior edge is seen from two faces: count it once.
+  adjacency.setFromTriplets(triplets.begin(), triplets.end(), [](double, double) { return 1.0; });
+  const Eigen::VectorXd degree = adjacency * Eigen::VectorXd::Ones(num_vertices);
+  SparseMatrix diagonal(num_vertices, num_vertices);
+  diagonal.reserve(Eigen::VectorXi::Ones(num_vertices));
+  for (int i = 0; i < num_vertices; ++i) diagonal.insert(i, i) = degree[i];
+  return adjacency - diagonal;
+}
+
+Eigen::VectorXd face_areas(const Positions& P, const Faces& F) {
+  Eigen::VectorXd A(F.rows());
+  parallel_for_chunks(F.rows(), [&](long b, long e) {
+    for (long f = b; f < e; ++f) {
+      const Corner c = corner(P, F, f);
+      A[f] = c.degenerate ? 0.0 : 0.5 * c.area2;
+    }
+  });
+  return A;
+}
+
+SparseMatrix gradient_operator(const Positions& P, const Faces& F) {
+  std::vector<Triplet> triplets;
+  triplets.reserve(F.rows() * 9);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Corner c = corner(P, F, f);
+    if (c.degenerate) continue;
+    const Vec3 n = (c.p[1] - c.p[0]).cross(c.p[2] - c.p[0]) / c.area2;
+    for (int k = 0; k < 3; ++k) {
+      // grad φ_k = n × (p_{k+2} - p_{k+1}) / (2A): perpendicular to the opposite edge, pointing at corner k.
+      const Vec3 g = n.cross(c.p[(k + 2) % 3] - c.p[(k + 1) % 3]) / c.area2;
+      for (int d = 0; d < 3; ++d) triplets.emplace_back(3 * f + d, F(f, k), g[d]);
+    }
+  }
+  SparseMatrix G(3 * F.rows(), P.rows());
+  G.setFromTriplets(triplets.begin(), triplets.end());
+  return G;
+}
+
+SparseMatrix divergence_operator(const Positions& P, const Faces& F) {
+  const Eigen::VectorXd area = face_areas(P, F);
+  Eigen::VectorXd area3(3 * F.rows());
+  for (Eigen::Index f = 0; f < F.rows(); ++f) area3.segment<3>(3 * f).setConstant(area[f]);
+  SparseMatrix D = -(gradient_operator(P, F).transpose() * area3.asDiagonal());
+  return D;
+}
+
+SparseMatrix submatrix(const SparseMatrix& A, const std::vector<int>& rows, const std::vector<int>& cols) {
+  std::vector<int> row_map(A.rows(), -1);
+  for (size_t r = 0; r < rows.size(); ++r) row_map[rows[r]] = static_cast<int>(r);
+  std::vector<Triplet> triplets;
+  for (size_t c = 0; c < cols.size(); ++c)
+    for (SparseMatrix::InnerIterator it(A, cols[c]); it; ++it)
+      if (row_map[it.row()] >= 0) triplets.emplace_back(row_map[it.row()], static_cast<int>(c), it.value());
+  SparseMatrix S(rows.size(), cols.size());
+  S.setFromTriplets(triplets.begin(), triplets.end());
+  return S;
+}
+
+}  // namespace msd

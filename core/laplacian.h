@@ -1,0 +1,44 @@
+#pragma once
+//! \file Discrete differential operators on triangle meshes (seed chapter 3 and appendix).
+
+#include <vector>
+
+#include "core/types.h"
+
+namespace msd {
+
+//! Cotangent Laplacian in symmetric form: Δf = M⁻¹ W f.
+struct CotanLaplacian {
+  //! #V by #V symmetric, W_ij = (cot α_ij + cot β_ij) / 2 for each edge, W_ii = -Σ_j W_ij: negative
+  //! semi-definite with the constants in its kernel.
+  SparseMatrix W;
+  //! #V mixed-Voronoi vertex areas (Meyer et al. 2003); they sum to the surface area.
+  Eigen::VectorXd mass;
+  int degenerate_faces = 0;    //!< faces of (near) zero area, left out of W and the mass
+  int clamped_cotangents = 0;  //!< needle angles whose cotangent was clamped to ±kMaxCotangent
+  static constexpr double kMaxCotangent = 1e5;
+};
+
+//! Cotan weights and mixed-Voronoi mass of (P #V×3, F #F×3). A face whose area is below 1e-14 times its
+//! squared longest edge counts as degenerate and contributes nothing; cotangents are clamped, so the
+//! result is always finite.
+CotanLaplacian cotan_laplacian(const Positions& P, const Faces& F);
+
+//! Uniform (graph) Laplacian in symmetric form: W_ij = 1 per edge, W_ii = -degree. Δ_uniform = D⁻¹ W.
+SparseMatrix uniform_laplacian(const Faces& F, int num_vertices);
+
+//! #F triangle areas.
+Eigen::VectorXd face_areas(const Positions& P, const Faces& F);
+
+//! Per-face gradient of piecewise-linear functions: 3#F by #V; rows 3f..3f+2 give the gradient on face f.
+//! Degenerate faces get zero rows.
+SparseMatrix gradient_operator(const Positions& P, const Faces& F);
+
+//! Integrated divergence of per-face vector fields: #V by 3#F, D = -Gᵀ A (A = face areas, 3 per face),
+//! so that D·G equals the cotan weight matrix W.
+SparseMatrix divergence_operator(const Positions& P, const Faces& F);
+
+//! Sub-matrix A(rows, cols) for index lists (each ascending or not; entries keep their list order).
+SparseMatrix submatrix(const SparseMatrix& A, const std::vector<int>& rows, const std::vector<int>& cols);
+
+}  // namespace msd

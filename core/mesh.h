@@ -1,0 +1,56 @@
+#pragma once
+//! \file The mesh type and its conversions to and from bulk Eigen arrays.
+
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+
+#include <vector>
+
+#include "core/types.h"
+
+namespace msd {
+
+struct MeshTraits : public OpenMesh::DefaultTraits {
+  using Point = OpenMesh::Vec3d;
+  using Normal = OpenMesh::Vec3d;
+};
+
+//! Triangle mesh with double-precision points. OpenMesh provides connectivity, circulators and
+//! halfedge queries; hot numerical paths work on positions() / faces() arrays instead.
+using Mesh = OpenMesh::TriMesh_ArrayKernelT<MeshTraits>;
+
+//! #V by 3 vertex positions, in vertex-index order.
+Positions positions(const Mesh& mesh);
+
+//! Writes #V by 3 positions back into the mesh. \throw InvalidInput if the row count differs from #V.
+void set_positions(Mesh& mesh, const Positions& P);
+
+//! #F by 3 vertex indices of the faces, in face-index order.
+Faces faces(const Mesh& mesh);
+
+//! Builds a mesh from arrays. \throw InvalidInput on an index out of range, a repeated index in a face,
+//! a non-finite coordinate, or a face that would make an edge non-manifold.
+Mesh make_mesh(const Positions& P, const Faces& F);
+
+//! Area-weighted unit vertex normals of (P, F) as #V by 3. Vertices without a non-degenerate incident
+//! face get (0, 0, 0). For repeated evaluation on one connectivity use VertexNormals.
+Positions vertex_normals(const Positions& P, const Faces& F);
+
+//! Area-weighted vertex normals for frame loops: the vertex-to-face incidence is built once, each
+//! compute() is O(#V + #F), parallel, and allocates nothing once N has the right size.
+class VertexNormals {
+ public:
+  VertexNormals() = default;
+  VertexNormals(const Faces& F, int num_vertices);
+  //! Unit normals of positions P (#V by 3) into N (#V by 3, resized only when its size is wrong).
+  void compute(const Positions& P, Positions& N) const;
+
+ private:
+  Faces F_;
+  std::vector<int> offsets_, incident_;  // CSR: faces around each vertex
+  mutable Positions face_normals_;        // area-weighted, one row per face
+};
+
+//! Axis-aligned bounding box diagonal length of P (0 for fewer than two points).
+double bounding_box_diagonal(const Positions& P);
+
+}  // namespace msd

@@ -1,0 +1,232 @@
+#include "core/region.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/errors.h"
+
+namespace msd {
+
+Region::Region(int num_vertices, int code) : codes_(num_vertices, code) {
+  if (code < 0) throw InvalidInput("Region: negative selection code " + std::to_string(code));
+  num_handles_ = code >= kFirstHandle && num_vertices > 0 ? code - kFirstHandle + 1 : 0;
+}
+
+Region Region::from_codes(std::vector<int> codes) {
+  Region r;
+  for (size_t v = 0; v < codes.size(); ++v)
+    if (codes[v] < 0)
+      throw InvalidInput("Region: vertex " + std::to_string(v) + " has negative selection code " + std::to_string(codes[v]));
+  r.codes_ = std::move(codes);
+  for (int c : r.codes_) r.num_handles_ = std::max(r.num_handles_, c - kFirstHandle + 1);
+  return r;
+}
+
+void Region::set(const std::vector<int>& vertices, int code) {
+  for (int v : vertices) {
+    if (v < 0 || v >= num_vertices())
+      throw InvalidInput("Region: vertex " + std::to_string(v) + " out of range [0, " + std::to_string(num_vertices()) + ")");
+    codes_[v] = code;
+  }
+  num_handles_ = 0;
+  for (int c : codes_) num_handles_ = std::max(num_handles_, c - kFirstHandle + 1);
+}
+
+namespace {
+template <class Pred>
+std::vector<int> vertices_where(const std::vector<int>& codes, Pred pred) {
+  std::vector<int> out;
+  for (int v = 0; v < static_cast<int>(codes.size()); ++v)
+    if (pred(codes[v])) out.push_back(v);
+  return out;
+}
+}  // namespace
+
+std::vector<int> Region::free_vertices() const { return vertices_where(codes_, [](int c) { return c == kFree; }); }
+std::vector<int> Region::constrained_vertices() const {
+  return vertices_where(codes_, [](int c) { return c != kFree; });
+}
+std::vector<int> Region::fixed_vertices() const { return vertices_where(codes_, [](int c) { return c == kFixed; }); }
+std::vector<int> Region::handle_vertices(int handle) const {
+  return vertices_where(codes_, [&](int c) { return c == kFirstHandle + handle; });
+}
+
+void Region::validate(const Mesh& mesh) const {
+  if (num_vertices() != static_cast<int>(mesh.n_vertices()))
+    throw InvalidInput("region has " + std::to_string(num_vertices()) + " vertex labels but the mesh has " +
+                       std::to_string(mesh.n_vertices()) + " vertices");
+  std::vector<int> count(num_handles_, 0);
+  for (int c : codes_)
+    if (c >= kFirstHandle) ++count[c - kFirstHandle];
+  for (int h = 0; h < num_handles_; ++h)
+    if (count[h] == 0)
+      throw InvalidInput("region: handle " + std::to_string(h) + " (selection code " + std::to_string(h + kFirstHandle) +
+                         ") has no vertex, but handle " + std::to_string(num_handles_ - 1) +
+                         " exists; handle codes must be consecutive");
+  // Flood-fill the free vertices; each component must reach a constrained neighbour.
+  std::vector<int> component(num_vertices(), -1), stack;
+  int num_components = 0;
+  for (int seed = 0; seed < num_vertices(); ++seed) {
+    if (!is_free(seed) || component[seed] >= 0) continue;
+    const int id = num_components++;
+    bool anchored = false;
+    int size = 0;
+    stack.assign(1, seed);
+    component[seed] = id;
+    while (!stack.empty()) {
+      const int v = stack.back();
+      stack.pop_back();
+      ++size;
+      for (auto w : mesh.vv_range(mesh.vertex_handle(v))) {
+        if (!is_free(w.idx())) {
+          anchored = true;
+        } else if (component[w.idx()] < 0) {
+          component[w.idx()] = id;
+          stack.push_back(w.idx());
+        }
+      }
+    }
+    if (!anchored)
+      throw TopologyError("region: free component " + std::to_string(id) + " (" + std::to_string(size) +
+                          " vertices, e.g. vertex " + std::to_string(seed) +
+                          ") touches no fixed or handle vertex, so its deformation is undetermined; "
+                          "fix or select a vertex in it");
+  }
+}
+
+namespace {
+
+// Whitespace-separated numbers of a text file with '#' comments, each with its line number.
+template <class T>
+std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char* who, const char* what) {
+  const std::string text = read_file(path, who);
+  std::vector<std::pair<T, int>> out;
+  int line = 1;
+  size_t i = 0;
+  while (i < text.size()) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line, ++i;
+    } else if (c == '#') {
+      while (i < text.size() && text[i] != '\n') ++i;
+    } else if (std::isspace(static_cast<unsigned char>(c))) {
+      ++i;
+    } else {
+      size_t e = i;
+      while (e < text.size() && !std::isspace(static_cast<unsigned char>(text[e])) && text[e] != '#') ++e;
+      T value{};
+      const char* first = text.data() + i + (text[i] == '+' ? 1 : 0);
+      auto [ptr, ec] = std::from_chars(first, text.data() + e, value);
+      if (ec != std::errc() || ptr != text.data() + e)
+        throw InvalidInput(std::string(who) + ": " + path + " line " + std::to_string(line) + ": expected " + what +
+                           ", found '" + text.substr(i, std::min<size_t>(e - i, 40)) + "'");
+      out.emplace_back(value, line);
+      i = e;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+Region read_sel(const std::string& path, int num_vertices) {
+  const auto values = read_numbers<int>(path, "read_sel", "an integer selection code (0 fixed, 1 free, 2+ handle)");
+  if (static_cast<int>(values.size()) != num_vertices)
+    throw InvalidInput("read_sel: " + path + " has " + std::to_string(values.size()) + " labels but the mesh has " +
+                       std::to_string(num_vertices) + " vertices");
+  std::vector<int> codes(values.size());
+  for (size_t v = 0; v < values.size(); ++v) {
+    if (values[v].first < 0)
+      throw InvalidInput("read_sel: " + path + " line " + std::to_string(values[v].second) + ": unknown label " +
+                         std::to_string(values[v].first) + " for vertex " + std::to_string(v) +
+                         " (0 fixed, 1 free, 2+k handle k)");
+    codes[v] = values[v].first;
+  }
+  return Region::from_codes(std::move(codes));
+}
+
+void write_sel(const Region& region, const std::string& path) {
+  std::string out = "# " + std::to_string(region.num_vertices()) +
+                    " vertices\n# per vertex status: 0=fixed, 1=deformable-region, 2+k=handle k\n";
+  for (int c : region.codes()) out += std::to_string(c) + "\n";
+  write_file_atomically(path, out);
+}
+
+Region read_dmat_groups(const std::string& path, int num_vertices) {
+  const auto values = read_numbers<long>(path, "read_dmat_groups", "an integer");
+  if (values.size() < 2) throw InvalidInput("read_dmat_groups: " + path + ": missing 'cols rows' header");
+  const long cols = values[0].first, rows = values[1].first;
+  if (cols != 1)
+    throw InvalidInput("read_dmat_groups: " + path + ": expected one column of group ids, header says " +
+                       std::to_string(cols) + " columns");
+  if (rows != num_vertices || static_cast<long>(values.size()) - 2 != rows)
+    throw InvalidInput("read_dmat_groups: " + path + ": " + std::to_string(values.size() - 2) + " values (header says " +
+                       std::to_string(rows) + ") for a mesh of " + std::to_string(num_vertices) + " vertices");
+  std::vector<int> codes(rows);
+  for (long v = 0; v < rows; ++v) {
+    const long g = values[v + 2].first;
+    if (g < -1)
+      throw InvalidInput("read_dmat_groups: " + path + " line " + std::to_string(values[v + 2].second) +
+                         ": group " + std::to_string(g) + " (expected -1 for free or a handle index >= 0)");
+    codes[v] = g < 0 ? Region::kFree : Region::kFirstHandle + static_cast<int>(g);
+  }
+  return Region::from_codes(std::move(codes));
+}
+
+std::vector<Mat4> read_def(const std::string& path) {
+  const auto values = read_numbers<double>(path, "read_def", "a number");
+  if (values.empty() || values.size() % 16 != 0)
+    throw InvalidInput("read_def: " + path + " has " + std::to_string(values.size()) +
+                       " numbers; expected one 4x4 matrix (16 numbers, row by row) per handle");
+  std::vector<Mat4> out(values.size() / 16);
+  for (size_t h = 0; h < out.size(); ++h) {
+    for (int k = 0; k < 16; ++k) {
+      const auto& [x, line] = values[16 * h + k];
+      if (!std::isfinite(x))
+        throw InvalidInput("read_def: " + path + " line " + std::to_string(line) + ": non-finite matrix entry");
+      out[h](k / 4, k % 4) = x;
+    }
+    if ((out[h].row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9)
+      throw InvalidInput("read_def: " + path + " line " + std::to_string(values[16 * h + 12].second) + ": matrix " +
+                         std::to_string(h) + " is not affine (its last row must be 0 0 0 1)");
+  }
+  return out;
+}
+
+void write_def(const std::vector<Mat4>& transforms, const std::string& path) {
+  std::ostringstream out;
+  out.precision(17);
+  for (size_t h = 0; h < transforms.size(); ++h) {
+    out << "# 4x4 transformation of handle " << h << "\n";
+    for (int r = 0; r < 4; ++r)
+      out << transforms[h](r, 0) << ' ' << transforms[h](r, 1) << ' ' << transforms[h](r, 2) << ' ' << transforms[h](r, 3) << '\n';
+  }
+  write_file_atomically(path, out.str());
+}
+
+std::vector<int> select_box(const Positions& P, const Vec3& lo, const Vec3& hi) {
+  std::vector<int> out;
+  for (int i = 0; i < P.rows(); ++i)
+    if ((P.row(i).transpose().array() >= lo.array()).all() && (P.row(i).transpose().array() <= hi.array()).all())
+      out.push_back(i);
+  return out;
+}
+
+std::vector<int> select_sphere(const Positions& P, const Vec3& center, double radius) {
+  std::vector<int> out;
+  for (int i = 0; i < P.rows(); ++i)
+    if ((P.row(i).transpose() - center).squaredNorm() <= radius * radius) out.push_back(i);
+  return out;
+}
+
+std::vector<int> select_halfspace(const Positions& P, const Vec3& point, const Vec3& normal) {
+  std::vector<int> out;
+  for (int i = 0; i < P.rows(); ++i)
+    if ((P.row(i).transpose() - point).dot(normal) >= 0) out.push_back(i);
+  return out;
+}
+
+}  // namespace msd

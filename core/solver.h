@@ -1,0 +1,75 @@
+#pragma once
+//! \file Sparse symmetric positive-definite solves and constrained quadratic minimisation (seed appendix).
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/types.h"
+
+namespace msd {
+
+//! Factors a sparse SPD matrix once and solves for any number of right-hand sides. Uses CHOLMOD's
+//! supernodal Cholesky when msdeform was built with SuiteSparse, else Eigen's SimplicialLDLT; the class
+//! hides which. solve() reuses internal workspace, so it is not safe to call concurrently on one object.
+class SparseSPDSolver {
+ public:
+  SparseSPDSolver();
+  ~SparseSPDSolver();
+  SparseSPDSolver(SparseSPDSolver&&) noexcept;
+  SparseSPDSolver& operator=(SparseSPDSolver&&) noexcept;
+
+  //! Factors A (n by n, symmetric; only its lower triangle is read).
+  //! \throw SolverError if A is not square, not positive definite (index() = the failing column), or
+  //! the factor does not fit in memory.
+  void factor(const SparseMatrix& A);
+  bool factored() const;
+  int size() const;
+
+  //! Solves A X = B for B n by k; X is resized only when its shape differs.
+  //! \throw UsageError before factor() or on a row-count mismatch.
+  void solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X) const;
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& B) const;
+
+  //! Which backend this build uses: "CHOLMOD supernodal" or "Eigen SimplicialLDLT".
+  static std::string backend();
+  //! Non-zeros of the Cholesky factor (fill-in measure), 0 before factor().
+  double factor_nonzeros() const;
+  //! Seconds the last factor() spent on ordering and symbolic analysis, and on the numeric factorisation.
+  double analyse_seconds() const;
+  double numeric_seconds() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+//! Minimises ½ xᵀQx + xᵀf over x (n by k) subject to x(known, :) = given values (libigl's
+//! min_quad_with_fixed, split into prepare and solve). prepare() factors Q restricted to the unknowns.
+class ConstrainedQuadratic {
+ public:
+  //! Q: n by n symmetric. known: indices of the fixed variables (any order, no repeats).
+  //! \throw InvalidInput on a bad index; SolverError (index() = the variable) when Q on the unknowns is
+  //! not positive definite, e.g. a group of unknowns is not coupled to any known variable.
+  void prepare(const SparseMatrix& Q, const std::vector<int>& known);
+
+  //! known_values: |known| by k, rows in the order of `known`; linear: n by k or null. Writes all n
+  //! rows of x (resized only when its shape differs). \throw UsageError before prepare or on shapes.
+  void solve(const Eigen::MatrixXd& known_values, Eigen::MatrixXd& x, const Eigen::MatrixXd* linear = nullptr) const;
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& known_values, const Eigen::MatrixXd* linear = nullptr) const;
+
+  const std::vector<int>& known() const { return known_; }
+  const std::vector<int>& unknown() const { return unknown_; }
+  //! Q(unknown, known): maps known values to the right-hand side of the reduced system.
+  const SparseMatrix& coupling() const { return Quk_; }
+  const SparseSPDSolver& solver() const { return solver_; }
+
+ private:
+  int n_ = 0;
+  std::vector<int> known_, unknown_;
+  SparseMatrix Quk_;
+  SparseSPDSolver solver_;
+  mutable Eigen::MatrixXd rhs_, xu_;
+};
+
+}  // namespace msd

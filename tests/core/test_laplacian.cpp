@@ -1,0 +1,121 @@
+#include <catch2/catch.hpp>
+
+#include "core/laplacian.h"
+#include "core/mesh_io.h"
+#include "core/scenes.h"
+#include "test_util.h"
+
+using namespace msd;
+
+namespace {
+double max_abs(const SparseMatrix& A) {
+  double m = 0;
+  for (int k = 0; k < A.outerSize(); ++k)
+    for (SparseMatrix::InnerIterator it(A, k); it; ++it) m = std::max(m, std::abs(it.value()));
+  return m;
+}
+}  // namespace
+
+TEST_CASE("cotan Laplacian: constants in the kernel, symmetric, mass sums to the area", "[core][laplacian]") {
+  Positions P;
+  Faces F;
+  SECTION("bumpy plane") {
+    SceneOptions o;
+    o.resolution = 2000;
+    const Scene s = make_surface(SceneShape::Plane, o);
+    P = s.P;
+    F = s.F;
+  }
+  SECTION("real mesh: bumpy.off") {
+    const Mesh m = load_mesh(test::shared_data("bumpy.off"));
+    P = positions(m);
+    F = faces(m);
+  }
+  const CotanLaplacian lap = cotan_laplacian(P, F);
+  CHECK(lap.degenerate_faces == 0);
+  const Eigen::VectorXd ones = Eigen::VectorXd::Ones(P.rows());
+  CHECK((lap.W * ones).cwiseAbs().maxCoeff() <= 1e-12 * max_abs(lap.W));
+  CHECK(max_abs(SparseMatrix(lap.W - SparseMatrix(lap.W.transpose()))) <= 1e-15 * max_abs(lap.W));
+  CHECK(lap.mass.sum() == Approx(face_areas(P, F).sum()).epsilon(1e-12));
+  CHECK(lap.mass.minCoeff() > 0);
+}
+
+TEST_CASE("cotan Laplacian: linear precision at interior vertices of a planar mesh", "[core][laplacian]") {
+  Positions P;
+  Faces F;
+  std::vector<bool> interior;
+  test::jittered_grid(12, 0.3, P, F, interior);
+  const CotanLaplacian lap = cotan_laplacian(P, F);
+  const Eigen::VectorXd f = 2.0 * P.col(0) - 3.0 * P.col(1) + Eigen::VectorXd::Constant(P.rows(), 0.5);
+  const Eigen::VectorXd Wf = lap.W * f;
+  for (int i = 0; i < P.rows(); ++i)
+    if (interior[i]) REQUIRE(std::abs(Wf[i]) <= 1e-12);
+}
+
+TEST_CASE("cotan Laplacian of a sphere approximates -2H n, better with refinement", "[core][laplacian]") {
+  double previous = 1e9;
+  for (int level = 2; level <= 5; ++level) {
+    Positions P;
+    Faces F;
+    test::icosphere(level, P, F);
+    const CotanLaplacian lap = cotan_laplacian(P, F);
+    const Positions HN = lap.mass.cwiseInverse().asDiagonal() * (lap.W * P);
+    // Unit sphere: Δp = -2 H n = -2 p.
+    const double err = (HN + 2.0 * P).rowwise().norm().maxCoeff() / 2.0;
+    INFO("level " << level << " max relative error " << err);
+    CHECK(err < previous);
+    previous = err;
+  }
+  CHECK(previous < 0.01);
+}
+
+TEST_CASE("gradient of a linear function is exact; divergence of gradient is W", "[core][laplacian]") {
+  Positions P;
+  Faces F;
+  test::icosphere(2, P, F);
+  P.col(0) *= 1.7;  // an ellipsoid, so faces are not all alike
+  const Vec3 a(0.3, -1.2, 2.0);
+  const Eigen::VectorXd f = P * a + Eigen::VectorXd::Constant(P.rows(), 4.0);
+  const SparseMatrix G = gradient_operator(P, F);
+  const Eigen::VectorXd g = G * f;
+  for (int t = 0; t < F.rows(); ++t) {
+    const Vec3 n = (Vec3(P.row(F(t, 1)) - P.row(F(t, 0)))).cross(Vec3(P.row(F(t, 2)) - P.row(F(t, 0)))).normalized();
+    const Vec3 expected = a - a.dot(n) * n;  // the tangential part of a
+    REQUIRE((g.segment<3>(3 * t) - expected).norm() <= 1e-12 * a.norm());
+  }
+  const SparseMatrix DG = divergence_operator(P, F) * G;
+  const CotanLaplacian lap = cotan_laplacian(P, F);
+  CHECK(max_abs(SparseMatrix(DG - lap.W)) <= 1e-12 * max_abs(lap.W));
+}
+
+TEST_CASE("degenerate and needle triangles give finite operators and are reported", "[core][laplacian]") {
+  Positions P(6, 3);
+  P << 0, 0, 0,  //
+      1, 0, 0,   //
+      0, 1, 0,   //
+      2, 0, 0,   // collinear with 0 and 1: zero-area face (0, 1, 3)
+      1, 1e-9, 0,  // needle
+      0.5, -1, 0;
+  Faces F(4, 3);
+  F << 0, 1, 2,  //
+      0, 3, 1,   //
+      1, 3, 4,   //
+      0, 5, 1;
+  const CotanLaplacian lap = cotan_laplacian(P, F);
+  CHECK(lap.degenerate_faces == 1);
+  CHECK(lap.clamped_cotangents >= 1);
+  for (int k = 0; k < lap.W.outerSize(); ++k)
+    for (SparseMatrix::InnerIterator it(lap.W, k); it; ++it) REQUIRE(std::isfinite(it.value()));
+  CHECK(lap.mass.allFinite());
+  CHECK(gradient_operator(P, F).coeffs().allFinite());
+}
+
+TEST_CASE("uniform Laplacian: rows sum to zero, diagonal is minus the degree", "[core][laplacian]") {
+  Positions P;
+  Faces F;
+  test::icosphere(1, P, F);
+  const SparseMatrix W = uniform_laplacian(F, static_cast<int>(P.rows()));
+  CHECK((W * Eigen::VectorXd::Ones(P.rows())).cwiseAbs().maxCoeff() == 0.0);
+  // Icosahedron vertices have degree 5, edge midpoints degree 6.
+  for (int i = 0; i < P.rows(); ++i) REQUIRE(-W.coeff(i, i) == (i < 12 ? 5.0 : 6.0));
+}

@@ -1,0 +1,96 @@
+#include <catch2/catch.hpp>
+
+#include "core/errors.h"
+#include "core/mesh_io.h"
+#include "core/region.h"
+#include "core/scenes.h"
+#include "test_util.h"
+
+using namespace msd;
+using Catch::Matchers::Contains;
+
+TEST_CASE("sel, dmat and def files round-trip", "[core][region]") {
+  test::TempDir tmp;
+  Region r(10);
+  r.set_fixed({0, 1});
+  r.set_handle({8, 9}, 0);
+  r.set_handle({5}, 1);
+  write_sel(r, tmp.file("a.sel"));
+  const Region back = read_sel(tmp.file("a.sel"), 10);
+  CHECK(back.codes() == r.codes());
+  CHECK(back.num_handles() == 2);
+  CHECK(back.handle_vertices(1) == std::vector<int>{5});
+  CHECK(back.free_vertices() == std::vector<int>{2, 3, 4, 6, 7});
+
+  Mat4 T = Mat4::Identity();
+  T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  T.topRightCorner<3, 1>() = Vec3(0.1, -2, 1e-7);
+  write_def({T, Mat4::Identity()}, tmp.file("a.def"));
+  const auto defs = read_def(tmp.file("a.def"));
+  REQUIRE(defs.size() == 2);
+  CHECK((defs[0] - T).cwiseAbs().maxCoeff() == 0.0);
+}
+
+TEST_CASE("real selections load: knight groups and CGAL's cactus benchmark", "[core][region][real]") {
+  const Mesh knight = load_mesh(test::shared_data("decimated-knight.off"));
+  const Region groups = read_dmat_groups(test::shared_data("decimated-knight-selection.dmat"), 502);
+  CHECK(groups.num_handles() == 3);
+  CHECK_FALSE(groups.free_vertices().empty());
+  groups.validate(knight);
+
+  const Mesh cactus = load_mesh(test::cgal_mesh("cactus.off"));
+  const Region sel = read_sel(test::cgal_deformation_data("cactus.sel"), static_cast<int>(cactus.n_vertices()));
+  CHECK(sel.fixed_vertices().size() == 68);
+  CHECK(sel.free_vertices().size() == 465);
+  CHECK(sel.handle_vertices(0).size() == 87);
+  sel.validate(cactus);
+  const auto def = read_def(test::cgal_deformation_data("cactus.def"));
+  REQUIRE(def.size() == 1);
+  CHECK(def[0](0, 0) == Approx(0.999641));
+  CHECK(def[0](2, 3) == Approx(0.821073));
+}
+
+TEST_CASE("geometric predicates select the right vertices", "[core][region]") {
+  Positions P(4, 3);
+  P << 0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 1;
+  CHECK(select_box(P, Vec3(-0.5, -0.5, -0.5), Vec3(1.5, 0.5, 0.5)) == std::vector<int>{0, 1});
+  CHECK(select_sphere(P, Vec3(0, 0, 0), 1.0) == std::vector<int>{0, 1, 2});
+  CHECK(select_halfspace(P, Vec3(0.5, 0, 0), Vec3(1, 0, 0)) == std::vector<int>{1, 3});
+}
+
+TEST_CASE("bad selection and transform files give specific errors", "[core][region][bad-input]") {
+  test::TempDir tmp;
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(tmp.file(name)) << text;
+    return tmp.file(name);
+  };
+  CHECK_THROWS_WITH(read_sel(tmp.file("missing.sel"), 3), Contains("cannot open") && Contains("missing.sel"));
+  CHECK_THROWS_WITH(read_sel(write("short.sel", "0\n1\n"), 3), Contains("has 2 labels but the mesh has 3 vertices"));
+  CHECK_THROWS_WITH(read_sel(write("neg.sel", "0\n-1\n2\n"), 3), Contains("line 2") && Contains("unknown label -1"));
+  CHECK_THROWS_WITH(read_sel(write("word.sel", "0\nx\n2\n"), 3), Contains("line 2") && Contains("found 'x'"));
+  CHECK_THROWS_WITH(read_def(write("bad.def", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0\n")),
+                    Contains("15 numbers") && Contains("4x4"));
+  CHECK_THROWS_WITH(read_def(write("proj.def", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n")), Contains("not affine"));
+  CHECK_THROWS_WITH(read_def(write("nan.def", "1 0 0 0\n0 nan 0 0\n0 0 1 0\n0 0 0 1\n")), Contains("line 2"));
+  CHECK_THROWS_WITH(read_dmat_groups(write("two.dmat", "2 3\n0 0 0 1 1 1\n"), 3), Contains("one column"));
+}
+
+TEST_CASE("region validation names an unconstrained free component", "[core][region][bad-input]") {
+  // Two separate triangles: the second is entirely free.
+  Positions P(6, 3);
+  P << 0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 0, 0, 6, 0, 0, 5, 1, 0;
+  Faces F(2, 3);
+  F << 0, 1, 2, 3, 4, 5;
+  const Mesh mesh = make_mesh(P, F);
+  Region r(6);
+  r.set_fixed({0});
+  r.set_handle({1}, 0);
+  CHECK_THROWS_AS(r.validate(mesh), TopologyError);
+  CHECK_THROWS_WITH(r.validate(mesh), Contains("free component 1") && Contains("3 vertices") && Contains("vertex 3"));
+  r.set_fixed({4});
+  CHECK_NOTHROW(r.validate(mesh));
+  CHECK_THROWS_WITH(Region(5).validate(mesh), Contains("5 vertex labels but the mesh has 6"));
+  Region gap(6);
+  gap.set_handle({0, 3}, 1);  // handle 0 empty
+  CHECK_THROWS_WITH(gap.validate(mesh), Contains("handle 0") && Contains("no vertex"));
+}

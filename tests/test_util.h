@@ -1,0 +1,93 @@
+#pragma once
+// Shared helpers for the tests: generated meshes, data paths and temporary folders.
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <string>
+
+#include "core/mesh.h"
+
+namespace msd::test {
+
+inline std::string shared_data(const std::string& name) { return std::string(MSD_SHARED_DATA) + "/" + name; }
+inline std::string cgal_mesh(const std::string& name) { return std::string(MSD_CGAL_DATA) + "/data/meshes/" + name; }
+inline std::string cgal_deformation_data(const std::string& name) {
+  return std::string(MSD_CGAL_DATA) + "/examples/Surface_mesh_deformation/data/" + name;
+}
+inline std::string test_data(const std::string& name) { return std::string(MSD_TEST_DATA) + "/" + name; }
+
+//! A fresh empty folder under the system temp dir, removed when the object dies.
+struct TempDir {
+  std::filesystem::path path;
+  TempDir() {
+    std::random_device rd;
+    path = std::filesystem::temp_directory_path() / ("msd-test-" + std::to_string(rd()) + std::to_string(rd()));
+    std::filesystem::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+  std::string file(const std::string& name) const { return (path / name).string(); }
+};
+
+//! Unit icosahedron refined `levels` times by midpoint splits projected to the unit sphere.
+inline void icosphere(int levels, Positions& P, Faces& F) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                    {11, 10, 2}, {10, 7, 6}, {7, 1, 8},   {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                                    {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (auto& p : v) p.normalize();
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      v.push_back((v[a] + v[b]).normalized());
+      return mid[key] = static_cast<int>(v.size()) - 1;
+    };
+    std::vector<Eigen::Vector3i> g;
+    for (const auto& tri : f) {
+      const int a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), c = midpoint(tri[2], tri[0]);
+      g.push_back({tri[0], a, c});
+      g.push_back({tri[1], b, a});
+      g.push_back({tri[2], c, b});
+      g.push_back({a, b, c});
+    }
+    f.swap(g);
+  }
+  P.resize(v.size(), 3);
+  for (size_t i = 0; i < v.size(); ++i) P.row(i) = v[i];
+  F.resize(f.size(), 3);
+  for (size_t i = 0; i < f.size(); ++i) F.row(i) = f[i];
+}
+
+//! Regular n x n grid on [0,1]^2 (z = 0) with interior vertices jittered in the plane by up to
+//! jitter * spacing; returns interior flags via `interior`.
+inline void jittered_grid(int n, double jitter, Positions& P, Faces& F, std::vector<bool>& interior, unsigned seed = 7) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  P.resize((n + 1) * (n + 1), 3);
+  interior.assign(P.rows(), false);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const int k = j * (n + 1) + i;
+      const bool inside = i > 0 && j > 0 && i < n && j < n;
+      interior[k] = inside;
+      P.row(k) << (i + (inside ? jitter * u(rng) : 0)) / n, (j + (inside ? jitter * u(rng) : 0)) / n, 0.0;
+    }
+  F.resize(2 * n * n, 3);
+  for (int j = 0, f = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      F.row(f++) << a, b, d;
+      F.row(f++) << a, d, c;
+    }
+}
+
+}  // namespace msd::test

@@ -1,0 +1,25 @@
+#pragma once
+//! \file The detail-encoding interface D = S ⊖ B and reconstruction S' = B' ⊕ D (seed 9.3).
+
+#include <string>
+
+#include "core/types.h"
+
+namespace msd {
+
+//! A detail encoding. encode() once for a detailed surface S and its base B; reconstruct() per frame
+//! from a deformed base B' (same connectivity as B): O(#V) and allocation-free once `out` is sized.
+class DetailEncoding {
+ public:
+  virtual ~DetailEncoding() = default;
+  //! Short name, e.g. "vectors", "normal".
+  virtual std::string name() const = 0;
+  //! S: #Vs by 3 detailed positions with faces Fs; B: #Vb by 3 base positions with faces Fb. Encodings
+  //! that need S and B to share connectivity throw InvalidInput when they do not.
+  virtual void encode(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) = 0;
+  //! Writes S' (#Vs by 3) for the deformed base B' (#Vb by 3) into out.
+  //! \throw UsageError before encode() or when B' has the wrong size.
+  virtual void reconstruct(const Positions& B_deformed, Positions& out) = 0;
+};
+
+}  // namespace msd

@@ -1,0 +1,1 @@
+// Translation unit that keeps the module non-empty; algorithms live in the other files.

@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   app.set_help_all_flag("--help-all", "Print help for all subcommands");
   msd::cli::add_info_command(app);
   msd::cli::add_scene_command(app);
+  msd::cli::add_deform_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,102 @@
+#include "deformation/shell.h"
+
+#include <cmath>
+
+#include "core/errors.h"
+#include "core/laplacian.h"
+#include "core/parallel.h"
+
+namespace msd {
+
+ShellDeformer::ShellDeformer(ShellOptions options) : options_(options) {
+  if (!(options_.ks >= 0) || !(options_.kb >= 0) || !std::isfinite(options_.ks) || !std::isfinite(options_.kb) ||
+      options_.ks + options_.kb <= 0)
+    throw InvalidInput("shell: stiffnesses must be finite and non-negative with ks + kb > 0 (got ks = " +
+                       std::to_string(options_.ks) + ", kb = " + std::to_string(options_.kb) + ")");
+}
+
+void ShellDeformer::do_prepare(const Mesh& mesh, const Region& region) {
+  rest_ = positions(mesh);
+  const Faces F = faces(mesh);
+  const int nv = static_cast<int>(rest_.rows()), nh = region.num_handles();
+  const CotanLaplacian lap = cotan_laplacian(rest_, F);
+  // (9.7) in symmetric form: multiply −ks·L + kb·L² (L = M⁻¹W) by M.
+  SparseMatrix Q(nv, nv);
+  if (options_.ks > 0) Q = -options_.ks * lap.W;
+  if (options_.kb > 0) Q += options_.kb * SparseMatrix(lap.W * lap.mass.cwiseInverse().asDiagonal() * lap.W);
+  constrained_ = region.constrained_vertices();
+  try {
+    system_.prepare(Q, constrained_);
+  } catch (const SolverError& e) {
+    throw SolverError("shell: the system is singular near vertex " + std::to_string(e.index()) +
+                          " (a degenerate neighbourhood, or a free vertex whose faces all have zero area)",
+                      e.index());
+  }
+  // Basis: handle k's vertices carry (p, 1) in its 4 columns, everything else constrained is 0; the free
+  // rows follow from one solve with 4h right-hand sides.
+  handle_of_.assign(nv, -1);
+  Eigen::MatrixXd known = Eigen::MatrixXd::Zero(constrained_.size(), 4 * nh);
+  for (size_t c = 0; c < constrained_.size(); ++c) {
+    const int v = constrained_[c], k = region.handle_of(v);
+    handle_of_[v] = k;
+    if (k >= 0) known.block<1, 4>(c, 4 * k) << rest_.row(v), 1.0;
+  }
+  fields_.resize(nv, 3 + 4 * nh);
+  fields_.leftCols(3) = rest_;
+  Eigen::MatrixXd basis;
+  system_.solve(known, basis);
+  fields_.rightCols(4 * nh) = basis;
+  if (!fields_.allFinite()) throw SolverError("shell: basis fields are not finite (ill-conditioned system)");
+  frame_matrix_.resize(4 * nh, 3);
+}
+
+void ShellDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
+  const int nh = static_cast<int>(transforms.size());
+  for (int k = 0; k < nh; ++k) {
+    Eigen::Matrix<double, 3, 4> M = transforms[k].topRows<3>();
+    M.leftCols<3>() -= Mat3::Identity();
+    frame_matrix_.middleRows<4>(4 * k) = M.transpose();
+  }
+  const double* f = fields_.data();
+  const long n = fields_.rows(), ncols = fields_.cols();
+  double* o = out.data();
+  const double* m = frame_matrix_.data();  // column-major (4h) x 3
+  const long mrows = frame_matrix_.rows();
+  parallel_for_chunks(n, [&](long b, long e) {
+    for (int d = 0; d < 3; ++d) {
+      double* od = o + d * n;
+      const double* rest = f + d * n;
+      for (long i = b; i < e; ++i) od[i] = rest[i];
+      for (long c = 3; c < ncols; ++c) {
+        const double w = m[d * mrows + (c - 3)];
+        const double* col = f + c * n;
+        for (long i = b; i < e; ++i) od[i] += col[i] * w;
+      }
+    }
+  }, 1 << 15);
+}
+
+void ShellDeformer::deform_displacements(const Positions& constrained, Positions& out) const {
+  if (!prepared()) throw UsageError("shell: deform_displacements() called before prepare()");
+  if (constrained.rows() != static_cast<Eigen::Index>(constrained_.size()))
+    throw UsageError("shell: " + std::to_string(constrained.rows()) + " constraint displacements for " +
+                     std::to_string(constrained_.size()) + " constrained vertices");
+  if (!constrained.allFinite()) throw InvalidInput("shell: constraint displacements contain NaN or inf");
+  Eigen::MatrixXd d;
+  system_.solve(constrained, d);
+  out = rest_ + d;
+}
+
+void ShellDeformer::deform_by_solve(const std::vector<Mat4>& transforms, Positions& out) {
+  Positions check;
+  deform(transforms, check);  // validates the frame exactly like deform()
+  Positions d(constrained_.size(), 3);
+  for (size_t c = 0; c < constrained_.size(); ++c) {
+    const int v = constrained_[c], k = handle_of_[v];
+    const Vec3 p = rest_.row(v);
+    d.row(c) = k < 0 ? Vec3::Zero() : Vec3(transform_point(transforms[k], p) - p);
+  }
+  deform_displacements(d, out);
+}
+
+}  // namespace msd

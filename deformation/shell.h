@@ -1,0 +1,60 @@
+#pragma once
+//! \file Shell-based deformation (seed 9.2): minimise the linearised thin-shell energy (9.4) of the
+//! displacement, i.e. solve −ks·Δd + kb·Δ²d = 0 (9.5) on the free vertices with the handle and fixed
+//! displacements as boundary conditions (9.6, 9.7).
+
+#include "core/solver.h"
+#include "deformation/deformer.h"
+
+namespace msd {
+
+struct ShellOptions {
+  //! Stretching stiffness ks (membrane term). Lengths are mesh units: ks and kb trade off as ks·ℓ² : kb
+  //! for a feature of size ℓ. ks = 0 (pure bending) is scale-invariant.
+  double ks = 0.0;
+  //! Bending stiffness kb (thin-plate term). Fig. 9.4: (1, 0) pure stretching, (0, 1) pure bending,
+  //! (1, 10) a mix on the unit plane.
+  double kb = 1.0;
+};
+
+//! Shell deformation with precomputed basis functions (Botsch & Kobbelt 2004). The system
+//!   Q = ks·(−W) + kb·(W M⁻¹ W)        (cotan weights W, mixed-Voronoi mass M; symmetric, SPD on free rows)
+//! is factored once. Displacements depend linearly on the handle transforms, so prepare() also solves
+//! for 4 basis fields per handle and a frame is p' = p + Σ_k B_k · [A_k − I | t_k]ᵀ, a #V×(4h) by
+//! (4h)×3 product: no solve per frame. Constraining all fixed and handle vertices fixes the first two
+//! rings around the free region, which gives C¹ continuity there (seed 9.2).
+class ShellDeformer : public Deformer {
+ public:
+  explicit ShellDeformer(ShellOptions options = {});
+  std::string name() const override { return "shell"; }
+  const ShellOptions& options() const { return options_; }
+
+  //! Arbitrary (non-affine) constraint displacements: `constrained` is #C by 3, one row per vertex of
+  //! Region::constrained_vertices() in that order (fixed rows usually zero). One back-substitution with
+  //! the stored factorisation. Writes #V by 3 positions. \throw UsageError before prepare or on shape.
+  void deform_displacements(const Positions& constrained, Positions& out) const;
+
+  //! The same frame as deform(), but by a direct back-substitution instead of the basis: the reference
+  //! the basis path is tested against. \throw as deform().
+  void deform_by_solve(const std::vector<Mat4>& transforms, Positions& out);
+
+  //! Basis fields: #V by 4h (handle k in columns 4k..4k+3); rows of handle vertices hold (p, 1).
+  Eigen::MatrixXd basis() const { return fields_.rightCols(fields_.cols() - 3); }
+
+ protected:
+  void do_prepare(const Mesh& mesh, const Region& region) override;
+  void do_deform(const std::vector<Mat4>& transforms, Positions& out) override;
+
+ private:
+  ShellOptions options_;
+  Positions rest_;
+  std::vector<int> constrained_;
+  ConstrainedQuadratic system_;
+  //! #V by (3 + 4h), column-major: rest positions, then the basis fields of each handle. One stream per
+  //! column keeps the frame loop vectorised.
+  Eigen::MatrixXd fields_;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> frame_matrix_;  // (4h) by 3: stacked [A_k − I | t_k]ᵀ
+  std::vector<int> handle_of_;
+};
+
+}  // namespace msd

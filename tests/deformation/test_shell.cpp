@@ -1,0 +1,254 @@
+#include <catch2/catch.hpp>
+
+#include <random>
+
+#include "core/errors.h"
+#include "core/laplacian.h"
+#include "core/scenes.h"
+#include "deformation/shell.h"
+#include "test_util.h"
+
+using namespace msd;
+using Catch::Matchers::Contains;
+
+namespace {
+
+Mat4 random_affine(std::mt19937& rng, double scale) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  Mat4 T = Mat4::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) T(r, c) += scale * u(rng);
+  return T;
+}
+
+Mat4 rigid(const Vec3& axis, double angle, const Vec3& t) {
+  Mat4 T = Mat4::Identity();
+  T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+  T.topRightCorner<3, 1>() = t;
+  return T;
+}
+
+Scene small_scene(const std::string& name, double bump_height = 0.05) {
+  SceneOptions o;
+  o.resolution = 3000;
+  o.bump_height = bump_height;
+  return make_scene(name, o);
+}
+
+// Max over constrained vertices of |p' − T p| (fixed: T = I).
+double constraint_error(const Positions& rest, const Positions& out, const Region& region, const std::vector<Mat4>& T) {
+  double err = 0;
+  for (int v = 0; v < region.num_vertices(); ++v) {
+    if (region.is_free(v)) continue;
+    const int k = region.handle_of(v);
+    const Vec3 target = k < 0 ? Vec3(rest.row(v)) : transform_point(T[k], rest.row(v));
+    err = std::max(err, (Vec3(out.row(v)) - target).norm());
+  }
+  return err;
+}
+
+// Angle between the normals of the two faces of each interior edge, after minus before.
+std::vector<std::pair<Vec3, double>> dihedral_change(const Mesh& mesh, const Positions& before, const Positions& after) {
+  auto normal = [&](const Positions& P, Mesh::FaceHandle f) {
+    Vec3 c[3];
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) c[k++] = P.row(v.idx());
+    return Vec3((c[1] - c[0]).cross(c[2] - c[0]).normalized());
+  };
+  std::vector<std::pair<Vec3, double>> out;
+  for (auto e : mesh.edges()) {
+    if (e.is_boundary()) continue;
+    const auto f0 = e.h0().face(), f1 = e.h1().face();
+    const double a0 = std::acos(std::clamp(normal(before, f0).dot(normal(before, f1)), -1.0, 1.0));
+    const double a1 = std::acos(std::clamp(normal(after, f0).dot(normal(after, f1)), -1.0, 1.0));
+    const Vec3 mid = 0.5 * (Vec3(before.row(e.v0().idx())) + Vec3(before.row(e.v1().idx())));
+    out.emplace_back(mid, std::abs(a1 - a0));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("shell: identity transforms return the input exactly", "[deformation][shell]") {
+  const Scene s = small_scene("bend120");
+  const Mesh mesh = make_mesh(s.P, s.F);
+  for (ShellOptions o : {ShellOptions{1, 0}, ShellOptions{0, 1}, ShellOptions{1, 10}}) {
+    ShellDeformer shell(o);
+    shell.prepare(mesh, s.region);
+    CHECK((shell.deform({Mat4::Identity()}) - s.P).cwiseAbs().maxCoeff() <= 1e-12);
+  }
+}
+
+TEST_CASE("shell: the result solves (9.6) at free vertices and meets every constraint", "[deformation][shell]") {
+  const Scene s = small_scene("bend120");
+  const Mesh mesh = make_mesh(s.P, s.F);
+  const CotanLaplacian lap = cotan_laplacian(s.P, s.F);
+  const SparseMatrix bilaplacian = lap.W * lap.mass.cwiseInverse().asDiagonal() * lap.W;
+  for (ShellOptions o : {ShellOptions{1, 0}, ShellOptions{0, 1}, ShellOptions{1, 10}}) {
+    INFO("ks " << o.ks << " kb " << o.kb);
+    ShellDeformer shell(o);
+    shell.prepare(mesh, s.region);
+    const Positions out = shell.deform(s.transforms);
+    const Positions d = out - s.P;
+    const SparseMatrix Q = SparseMatrix(-o.ks * lap.W) + o.kb * bilaplacian;
+    const Positions residual = Q * d;
+    const double scale = (Q.cwiseAbs() * d.cwiseAbs()).maxCoeff();  // size of the terms that cancel
+    double worst = 0;
+    for (int v : s.region.free_vertices()) worst = std::max(worst, residual.row(v).norm());
+    CHECK(worst <= 1e-9 * scale);
+    CHECK(constraint_error(s.P, out, s.region, s.transforms) <= 1e-12);
+  }
+}
+
+TEST_CASE("shell: translations move everything rigidly; rigid motions do on a flat interior region", "[deformation][shell]") {
+  SECTION("translation of all constraints, bumpy plane") {
+    const Scene s = small_scene("lift");
+    Region both = s.region;
+    both.set_handle(s.region.fixed_vertices(), 0);  // every constrained vertex in one handle
+    ShellDeformer shell;
+    shell.prepare(make_mesh(s.P, s.F), both);
+    const Mat4 T = rigid(Vec3::UnitX(), 0.0, Vec3(0.3, -1, 2));
+    const Positions out = shell.deform({T});
+    const Positions expected = s.P.rowwise() + T.topRightCorner<3, 1>().transpose();
+    const double err = (out - expected).cwiseAbs().maxCoeff();
+    INFO("err " << err << " finite " << out.allFinite());
+    CHECK(err <= 1e-11 * T.topRightCorner<3, 1>().norm());  // solve round-off only
+  }
+  SECTION("rigid motion, flat grid with the free region two rings inside the constraints") {
+    Positions P;
+    Faces F;
+    std::vector<bool> interior;
+    test::jittered_grid(24, 0.25, P, F, interior);
+    Region region(static_cast<int>(P.rows()));
+    std::vector<int> handle;
+    for (int v = 0; v < P.rows(); ++v)
+      if (std::max(std::abs(P(v, 0) - 0.5), std::abs(P(v, 1) - 0.5)) > 0.3) handle.push_back(v);
+    region.set_handle(handle, 0);
+    const Mat4 T = rigid(Vec3(1, 2, 3), 0.8, Vec3(0.1, 0.2, -0.3));
+    for (ShellOptions o : {ShellOptions{1, 0}, ShellOptions{0, 1}, ShellOptions{1, 10}}) {
+      ShellDeformer shell(o);
+      shell.prepare(make_mesh(P, F), region);
+      const Positions out = shell.deform({T});
+      double err = 0;
+      for (int v = 0; v < P.rows(); ++v) err = std::max(err, (Vec3(out.row(v)) - transform_point(T, P.row(v))).norm());
+      CHECK(err <= 1e-10);
+    }
+  }
+}
+
+TEST_CASE("shell: the basis path agrees with a direct solve for random affine handles", "[deformation][shell]") {
+  const Scene s = small_scene("lift");
+  Region region = s.region;
+  // A second handle: a disc in the middle of the free region.
+  std::vector<int> disc;
+  for (int v : s.region.free_vertices())
+    if ((Vec3(s.P.row(v)) - Vec3(0.5, 0.5, 0)).head<2>().norm() < 0.08) disc.push_back(v);
+  region.set_handle(disc, 1);
+  std::mt19937 rng(11);
+  for (ShellOptions o : {ShellOptions{1, 0}, ShellOptions{0, 1}, ShellOptions{1, 10}}) {
+    ShellDeformer shell(o);
+    shell.prepare(make_mesh(s.P, s.F), region);
+    for (int trial = 0; trial < 3; ++trial) {
+      const std::vector<Mat4> T = {random_affine(rng, 0.5), random_affine(rng, 0.5)};
+      Positions fast, direct;
+      shell.deform(T, fast);
+      shell.deform_by_solve(T, direct);
+      CHECK((fast - direct).cwiseAbs().maxCoeff() <= 1e-9);
+    }
+  }
+}
+
+TEST_CASE("shell: a mirror-symmetric scene gives a mirror-symmetric result", "[deformation][shell]") {
+  // Unit square, each cell split into 4 triangles around its centre: symmetric under y -> 1 - y.
+  const int n = 16;
+  std::vector<Vec3> pts;
+  std::vector<Eigen::Vector3i> tris;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) pts.emplace_back(double(i) / n, double(j) / n, 0.02 * std::sin(7.0 * i / n));
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      const int m = static_cast<int>(pts.size());
+      pts.emplace_back((i + 0.5) / n, (j + 0.5) / n, 0.02 * std::sin(7.0 * (i + 0.5) / n));
+      tris.push_back({a, b, m});
+      tris.push_back({b, d, m});
+      tris.push_back({d, c, m});
+      tris.push_back({c, a, m});
+    }
+  Positions P(pts.size(), 3);
+  for (size_t i = 0; i < pts.size(); ++i) P.row(i) = pts[i];
+  Faces F(tris.size(), 3);
+  for (size_t i = 0; i < tris.size(); ++i) F.row(i) = tris[i];
+  Region region(static_cast<int>(P.rows()));
+  region.set_fixed(select_box(P, Vec3(-1, -1, -1), Vec3(0.2, 2, 1)));
+  region.set_handle(select_box(P, Vec3(0.8, -1, -1), Vec3(2, 2, 1)), 0);
+  ShellDeformer shell(ShellOptions{1, 10});
+  shell.prepare(make_mesh(P, F), region);
+  // A rotation about the y axis plus a lift commutes with the mirror y -> 1 - y.
+  const Positions lifted = shell.deform({rigid(Vec3::UnitY(), 0.5, Vec3(0, 0, 0.2))});
+  double asym = 0;
+  for (int v = 0; v < P.rows(); ++v) {
+    // The mirror partner of v: same x, z; y -> 1 - y.
+    int w = -1;
+    for (int u = 0; u < P.rows() && w < 0; ++u)
+      if (std::abs(P(u, 0) - P(v, 0)) < 1e-12 && std::abs(P(u, 1) - (1 - P(v, 1))) < 1e-12) w = u;
+    REQUIRE(w >= 0);
+    asym = std::max(asym, std::abs(lifted(v, 0) - lifted(w, 0)) + std::abs(lifted(v, 1) - (1 - lifted(w, 1))) +
+                              std::abs(lifted(v, 2) - lifted(w, 2)));
+  }
+  CHECK(asym <= 1e-10);
+}
+
+TEST_CASE("shell: Fig. 9.4, stretching creases at the free-region boundary, bending is smooth", "[deformation][shell]") {
+  const Scene s = small_scene("lift", 0.0);  // flat plane, so every dihedral change comes from the edit
+  const Mesh mesh = make_mesh(s.P, s.F);
+  auto boundary_kink = [&](ShellOptions o, double* elsewhere) {
+    ShellDeformer shell(o);
+    shell.prepare(mesh, s.region);
+    const Positions out = shell.deform(s.transforms);
+    double at = 0, away = 0;
+    for (const auto& [mid, change] : dihedral_change(mesh, s.P, out)) {
+      const double dist = std::min(std::abs(mid.x() - 0.2), std::abs(mid.x() - 0.8));
+      (dist < 0.02 ? at : away) = std::max(dist < 0.02 ? at : away, change);
+    }
+    *elsewhere = away;
+    return at;
+  };
+  double stretch_away, bend_away;
+  const double stretch = boundary_kink({1, 0}, &stretch_away) * 180 / M_PI;
+  const double bend = boundary_kink({0, 1}, &bend_away) * 180 / M_PI;
+  INFO("max dihedral change at the boundary: stretching " << stretch << " deg, bending " << bend << " deg");
+  // A lift of 0.3 over 0.6: the membrane solution is a ramp that meets the strips at a kink (~26°) and is
+  // straight elsewhere; the bending solution leaves the strips tangentially (C¹), so at the boundary it
+  // bends no more than its own smooth curvature does elsewhere.
+  CHECK(stretch > 15.0);
+  CHECK(stretch > 5 * stretch_away * 180 / M_PI);
+  CHECK(bend <= 1.5 * bend_away * 180 / M_PI);
+  CHECK(bend < stretch / 4);
+}
+
+TEST_CASE("shell: bad use gives clear errors", "[deformation][shell][bad-input]") {
+  const Scene s = small_scene("lift");
+  const Mesh mesh = make_mesh(s.P, s.F);
+  ShellDeformer shell;
+  CHECK_THROWS_WITH(shell.deform({Mat4::Identity()}), Contains("before prepare"));
+  Region no_handle = s.region;
+  no_handle.set_fixed(s.region.handle_vertices(0));
+  CHECK_THROWS_WITH(shell.prepare(mesh, no_handle), Contains("no handle"));
+  shell.prepare(mesh, s.region);
+  CHECK_THROWS_AS(shell.deform({}), UsageError);
+  CHECK_THROWS_WITH(shell.deform({Mat4::Identity(), Mat4::Identity()}), Contains("2 handle transforms given") && Contains("1 handle"));
+  Mat4 bad = Mat4::Identity();
+  bad(1, 1) = std::nan("");
+  CHECK_THROWS_WITH(shell.deform({bad}), Contains("non-finite"));
+  Mat4 projective = Mat4::Identity();
+  projective(3, 0) = 0.5;
+  CHECK_THROWS_WITH(shell.deform({projective}), Contains("not affine"));
+  Region island(static_cast<int>(s.P.rows()), Region::kFree);  // no fixed or handle at all ...
+  island.set_handle({0}, 0);                                    // ... except one vertex: fine
+  CHECK_NOTHROW(ShellDeformer().prepare(mesh, island));
+  CHECK_THROWS_AS(ShellDeformer(ShellOptions{0, 0}), InvalidInput);
+  CHECK_THROWS_AS(ShellDeformer(ShellOptions{-1, 1}), InvalidInput);
+  Positions out;
+  CHECK_THROWS_AS(shell.deform_displacements(Positions::Zero(3, 3), out), UsageError);
+}

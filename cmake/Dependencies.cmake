@@ -34,3 +34,16 @@ endif()
 add_library(msd_opensubdiv INTERFACE)
 target_include_directories(msd_opensubdiv SYSTEM INTERFACE "${OPENSUBDIV_INCLUDE_DIR}")
 target_link_libraries(msd_opensubdiv INTERFACE "${OPENSUBDIV_CPU_LIBRARY}")
+
+# CGAL last (see the top of this file). Only analysis/ uses it, in one translation unit.
+find_package(CGAL REQUIRED)
+
+# stb_image_write for PNG output (Debian libstb-dev ships headers under stb/ and a compiled libstb).
+find_path(STB_INCLUDE_DIR stb/stb_image_write.h)
+find_library(STB_LIBRARY stb)
+if(NOT STB_INCLUDE_DIR OR NOT STB_LIBRARY)
+  message(FATAL_ERROR "stb (libstb-dev) not found: run scripts/setup.sh")
+endif()
+add_library(msd_stb INTERFACE)
+target_include_directories(msd_stb SYSTEM INTERFACE "${STB_INCLUDE_DIR}")
+target_link_libraries(msd_stb INTERFACE "${STB_LIBRARY}")

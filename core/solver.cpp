@@ -51,13 +51,12 @@ struct SparseSPDSolver::Impl {
     for (cholmod_dense** d : {&X, &Y, &E})
       if (*d) cholmod_l_free_dense(d, &common);
   }
-  void factor(const SparseMatrix& A) {
-    release();
-    n = static_cast<int>(A.rows());
-    // Lower triangle, compressed columns, 64-bit indices.
+  // Lower triangle of A as a CHOLMOD matrix (compressed columns, 64-bit indices); caller frees it.
+  cholmod_sparse* to_cholmod(const SparseMatrix& A) {
     long nnz = 0;
     for (int j = 0; j < A.outerSize(); ++j)
       for (SparseMatrix::InnerIterator it(A, j); it; ++it) nnz += it.row() >= j;
+    const long n = A.rows();
     cholmod_sparse* S = cholmod_l_allocate_sparse(n, n, nnz, true, true, -1, CHOLMOD_REAL, &common);
     if (!S) throw SolverError("SparseSPDSolver: out of memory storing a " + std::to_string(n) + "x" + std::to_string(n) + " matrix");
     auto* colp = static_cast<SuiteSparse_long*>(S->p);
@@ -70,6 +69,12 @@ struct SparseSPDSolver::Impl {
         if (it.row() >= j) rowi[k] = it.row(), val[k++] = it.value();
     }
     colp[n] = k;
+    return S;
+  }
+  void factor(const SparseMatrix& A) {
+    release();
+    n = static_cast<int>(A.rows());
+    cholmod_sparse* S = to_cholmod(A);
     auto t0 = std::chrono::steady_clock::now();
     L = cholmod_l_analyze(S, &common);
     analyse_seconds = seconds_since(t0);
@@ -77,7 +82,12 @@ struct SparseSPDSolver::Impl {
       cholmod_l_free_sparse(&S, &common);
       throw SolverError("SparseSPDSolver: symbolic analysis failed (CHOLMOD status " + std::to_string(common.status) + ")");
     }
-    t0 = std::chrono::steady_clock::now();
+    numeric(S);
+  }
+  void refactor(const SparseMatrix& A) { numeric(to_cholmod(A)); }
+  // Numeric factorisation into L (whose symbolic analysis is done); frees S.
+  void numeric(cholmod_sparse* S) {
+    const auto t0 = std::chrono::steady_clock::now();
     cholmod_l_factorize(S, L, &common);
     numeric_seconds = seconds_since(t0);
     cholmod_l_free_sparse(&S, &common);
@@ -140,10 +150,14 @@ struct SparseSPDSolver::Impl {
   void factor(const SparseMatrix& A) {
     ok = false;
     n = static_cast<int>(A.rows());
-    auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = std::chrono::steady_clock::now();
     ldlt.analyzePattern(A);
     analyse_seconds = seconds_since(t0);
-    t0 = std::chrono::steady_clock::now();
+    refactor(A);
+  }
+  void refactor(const SparseMatrix& A) {
+    ok = false;
+    const auto t0 = std::chrono::steady_clock::now();
     ldlt.factorize(A);
     numeric_seconds = seconds_since(t0);
     if (ldlt.info() != Eigen::Success) throw SolverError("SparseSPDSolver: factorisation failed");
@@ -175,6 +189,14 @@ void SparseSPDSolver::factor(const SparseMatrix& A) {
     throw SolverError("SparseSPDSolver: matrix is " + std::to_string(A.rows()) + "x" + std::to_string(A.cols()) + ", not square");
   if (A.rows() == 0) throw SolverError("SparseSPDSolver: empty matrix");
   impl_->factor(A);
+}
+
+void SparseSPDSolver::refactor(const SparseMatrix& A) {
+  if (!factored()) throw UsageError("SparseSPDSolver::refactor: call factor() first");
+  if (A.rows() != impl_->n || A.cols() != impl_->n)
+    throw UsageError("SparseSPDSolver::refactor: matrix is " + std::to_string(A.rows()) + "x" + std::to_string(A.cols()) +
+                     ", the factored one " + std::to_string(impl_->n) + "x" + std::to_string(impl_->n));
+  impl_->refactor(A);
 }
 
 bool SparseSPDSolver::factored() const { return impl_ && impl_->n > 0 && impl_->factor_nonzeros() > 0; }

@@ -35,6 +35,23 @@ TEST_CASE("SparseSPDSolver solves several right-hand sides at once", "[core][sol
   CHECK(solver.factor_nonzeros() > 0);
 }
 
+TEST_CASE("SparseSPDSolver::refactor reuses the analysis for new values on the same pattern", "[core][solver]") {
+  Positions P;
+  Faces F;
+  SparseMatrix A = test_matrix(P, F);
+  A.diagonal().array() += 1.0;
+  SparseSPDSolver solver;
+  CHECK_THROWS_AS(solver.refactor(A), UsageError);
+  solver.factor(A);
+  SparseMatrix A2 = A;
+  A2.diagonal().array() += 3.0;
+  A2.coeffs() *= 2.0;
+  solver.refactor(A2);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(A.rows(), 2);
+  CHECK((A2 * solver.solve(B) - B).norm() <= 1e-10 * B.norm());
+  CHECK_THROWS_AS(solver.refactor(SparseMatrix(3, 3)), UsageError);
+}
+
 TEST_CASE("SparseSPDSolver reports a matrix that is not positive definite", "[core][solver]") {
   Positions P;
   Faces F;

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "core/memory.h"
 #include "core/laplacian.h"
 #include "core/scenes.h"
 #include "core/solver.h"
@@ -16,6 +17,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  msd::retain_freed_memory();
   std::vector<std::string> sizes;
   for (int i = 1; i < argc; ++i) sizes.emplace_back(argv[i]);
   if (sizes.empty()) sizes = {"10k", "100k", "1M"};

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/memory.h"
 #include "core/scenes.h"
 #include "deformation/shell.h"
 
@@ -16,6 +17,7 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 }  // namespace
 
 int main(int argc, char** argv) {
+  msd::retain_freed_memory();
   std::vector<std::string> sizes;
   for (int i = 1; i < argc; ++i) sizes.emplace_back(argv[i]);
   if (sizes.empty()) sizes = {"100k", "1M"};

@@ -2,15 +2,18 @@
 #include <iostream>
 
 #include "apps/msdeform/commands.h"
+#include "core/memory.h"
 #include "core/errors.h"
 
 int main(int argc, char** argv) {
+  msd::retain_freed_memory();
   CLI::App app{"msdeform: multi-scale, detail-preserving deformation of triangle meshes"};
   app.require_subcommand(1);
   app.set_help_all_flag("--help-all", "Print help for all subcommands");
   msd::cli::add_info_command(app);
   msd::cli::add_scene_command(app);
   msd::cli::add_deform_command(app);
+  msd::cli::add_decompose_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

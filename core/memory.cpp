@@ -1,0 +1,13 @@
+#include "core/memory.h"
+
+#include <malloc.h>
+
+namespace msd {
+
+void retain_freed_memory() {
+  mallopt(M_MMAP_MAX, 0);                 // serve large blocks from the heap ...
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);     // ... and never hand free heap top back below 1 GiB ...
+  mallopt(M_TOP_PAD, 256 << 20);          // ... and grow it in 256 MiB steps.
+}
+
+}  // namespace msd

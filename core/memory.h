@@ -1,0 +1,15 @@
+#pragma once
+//! \file Process-wide allocator tuning for programs that build and factor large sparse systems.
+
+namespace msd {
+
+//! Makes glibc's malloc keep freed memory for reuse instead of returning it to the system: large blocks
+//! come from the heap rather than fresh mmap()s, and the heap is not trimmed. CHOLMOD, OpenBLAS and
+//! Eigen allocate and free big temporaries many times during a factorisation; with the default
+//! settings every one of them is page-faulted in anew. Measured on the 1M-vertex bi-Laplacian (2 cores):
+//! factorisation 9.7 s -> 6.2 s, assembly 2.0 s -> 1.1 s. The price: the process's resident size does not
+//! shrink after a peak. Call once at program start (the msdeform tool and the benchmarks do); a library
+//! never calls it on its own.
+void retain_freed_memory();
+
+}  // namespace msd

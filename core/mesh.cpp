@@ -58,33 +58,101 @@ Mesh make_mesh(const Positions& P, const Faces& F) {
   return mesh;
 }
 
-VertexNormals::VertexNormals(const Faces& F, int num_vertices) : F_(F) {
-  offsets_.assign(num_vertices + 1, 0);
+VertexNormals::VertexNormals(const Faces& F, int num_vertices) {
+  // The (j, k) corner pairs of every vertex, counter-clockwise as in its faces.
+  std::vector<int> count(num_vertices + 1, 0);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) ++offsets_[F(f, k) + 1];
-  for (int v = 0; v < num_vertices; ++v) offsets_[v + 1] += offsets_[v];
-  incident_.resize(offsets_.back());
-  std::vector<int> fill(offsets_.begin(), offsets_.end() - 1);
+    for (int c = 0; c < 3; ++c) ++count[F(f, c) + 1];
+  for (int v = 0; v < num_vertices; ++v) count[v + 1] += count[v];
+  std::vector<int> pairs(2 * static_cast<size_t>(count.back())), fill(count.begin(), count.end() - 1);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) incident_[fill[F(f, k)]++] = static_cast<int>(f);
-  face_normals_.resize(F.rows(), 3);
+    for (int c = 0; c < 3; ++c) {
+      const int at = fill[F(f, c)]++;
+      pairs[2 * at] = F(f, (c + 1) % 3);
+      pairs[2 * at + 1] = F(f, (c + 2) % 3);
+    }
+  // Chain the pairs into one fan per vertex where the vertex is manifold; keep the pairs otherwise.
+  offsets_.assign(1, 0);
+  kind_.assign(num_vertices, kIsolated);
+  ring_.reserve(pairs.size() / 2 + num_vertices);
+  std::vector<int> chain;
+  std::vector<char> used;
+  for (int v = 0; v < num_vertices; ++v) {
+    const int* p = pairs.data() + 2 * count[v];
+    const int n = count[v + 1] - count[v];
+    if (n > 0) {
+      // Start where no pair ends (a boundary fan), else anywhere.
+      int start = 0;
+      for (int a = 0; a < n; ++a) {
+        bool ends_here = false;
+        for (int b = 0; b < n && !ends_here; ++b) ends_here = p[2 * b + 1] == p[2 * a];
+        if (!ends_here) {
+          start = a;
+          break;
+        }
+      }
+      chain.assign(1, p[2 * start]);
+      used.assign(n, 0);
+      for (int cur = start; cur >= 0;) {
+        used[cur] = 1;
+        chain.push_back(p[2 * cur + 1]);
+        int next = -1;
+        for (int b = 0; b < n && next < 0; ++b)
+          if (!used[b] && p[2 * b] == p[2 * cur + 1]) next = b;
+        cur = next;
+      }
+      const bool all_used = static_cast<int>(chain.size()) == n + 1;
+      if (all_used && chain.back() == chain.front()) {
+        kind_[v] = kClosedFan;
+        ring_.insert(ring_.end(), chain.begin(), chain.end() - 1);
+      } else if (all_used) {
+        kind_[v] = kOpenFan;
+        ring_.insert(ring_.end(), chain.begin(), chain.end());
+      } else {
+        kind_[v] = kFacePairs;
+        ring_.insert(ring_.end(), p, p + 2 * n);
+      }
+    }
+    offsets_.push_back(static_cast<int>(ring_.size()));
+  }
 }
 
 void VertexNormals::compute(const Positions& P, Positions& N) const {
-  const long nv = static_cast<long>(offsets_.size()) - 1;
+  const long nv = static_cast<long>(kind_.size());
   if (N.rows() != nv) N.resize(nv, 3);
-  parallel_for_chunks(F_.rows(), [&](long b, long e) {
-    for (long f = b; f < e; ++f) {
-      const Vec3 p0 = P.row(F_(f, 0)), p1 = P.row(F_(f, 1)), p2 = P.row(F_(f, 2));
-      face_normals_.row(f) = (p1 - p0).cross(p2 - p0);  // length = 2 * area: area weighting for free
-    }
-  });
+  const double *px = P.col(0).data(), *py = P.col(1).data(), *pz = P.col(2).data();
+  double *nx = N.col(0).data(), *ny = N.col(1).data(), *nz = N.col(2).data();
   parallel_for_chunks(nv, [&](long b, long e) {
     for (long v = b; v < e; ++v) {
-      Vec3 n = Vec3::Zero();
-      for (int k = offsets_[v]; k < offsets_[v + 1]; ++k) n += face_normals_.row(incident_[k]);
-      const double len = n.norm();
-      N.row(v) = len > 0 ? Vec3(n / len) : Vec3::Zero();
+      const int* r = ring_.data() + offsets_[v];
+      const int len = offsets_[v + 1] - offsets_[v];
+      const double x = px[v], y = py[v], z = pz[v];
+      double sx = 0, sy = 0, sz = 0;
+      auto add = [&](int i, int j) {  // (p_i − p) × (p_j − p)
+        const double ax = px[i] - x, ay = py[i] - y, az = pz[i] - z;
+        const double bx = px[j] - x, by = py[j] - y, bz = pz[j] - z;
+        sx += ay * bz - az * by;
+        sy += az * bx - ax * bz;
+        sz += ax * by - ay * bx;
+      };
+      switch (kind_[v]) {
+        case kClosedFan:
+          for (int t = 0; t < len; ++t) add(r[t], r[t + 1 == len ? 0 : t + 1]);
+          break;
+        case kOpenFan:
+          for (int t = 0; t + 1 < len; ++t) add(r[t], r[t + 1]);
+          break;
+        case kFacePairs:
+          for (int t = 0; t < len; t += 2) add(r[t], r[t + 1]);
+          break;
+        default:
+          break;
+      }
+      const double norm = std::sqrt(sx * sx + sy * sy + sz * sz);
+      const double inv = norm > 0 ? 1.0 / norm : 0.0;
+      nx[v] = sx * inv;
+      ny[v] = sy * inv;
+      nz[v] = sz * inv;
     }
   });
 }

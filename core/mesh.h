@@ -35,8 +35,9 @@ Mesh make_mesh(const Positions& P, const Faces& F);
 //! face get (0, 0, 0). For repeated evaluation on one connectivity use VertexNormals.
 Positions vertex_normals(const Positions& P, const Faces& F);
 
-//! Area-weighted vertex normals for frame loops: the vertex-to-face incidence is built once, each
-//! compute() is O(#V + #F), parallel, and allocates nothing once N has the right size.
+//! Area-weighted vertex normals for frame loops. The constructor orders each vertex's one-ring once; a
+//! compute() then sums (v_t − p) × (v_{t+1} − p) over consecutive ring neighbours (twice the area-weighted
+//! face normals) without any per-face intermediate: O(#V), parallel, allocation-free once N is sized.
 class VertexNormals {
  public:
   VertexNormals() = default;
@@ -45,9 +46,9 @@ class VertexNormals {
   void compute(const Positions& P, Positions& N) const;
 
  private:
-  Faces F_;
-  std::vector<int> offsets_, incident_;  // CSR: faces around each vertex
-  mutable Positions face_normals_;        // area-weighted, one row per face
+  enum Kind : unsigned char { kIsolated, kClosedFan, kOpenFan, kFacePairs };
+  std::vector<int> offsets_, ring_;  // per vertex: its ring (closed or open fan) or (j, k) pairs of its faces
+  std::vector<unsigned char> kind_;
 };
 
 //! Axis-aligned bounding box diagonal length of P (0 for fewer than two points).

@@ -84,9 +84,10 @@ Scene bar(const SceneOptions& o) {
   s.coarse_F.resize(2 * nu * nv_around, 3);
   for (int j = 0, f = 0; j < nv_around; ++j)
     for (int i = 0; i < nu; ++i) {
+      // a → b runs along +x and a → c around the axis (+φ): (a, d, b) and (a, c, d) face away from the axis.
       const int a = j * (nu + 1) + i, b = a + 1, c = ((j + 1) % nv_around) * (nu + 1) + i, d = c + 1;
-      s.coarse_F.row(f++) << a, b, d;  // outward orientation (normals point away from the axis)
-      s.coarse_F.row(f++) << a, d, c;
+      s.coarse_F.row(f++) << a, d, b;
+      s.coarse_F.row(f++) << a, c, d;
     }
   s.refinement = loop_refine(s.coarse_F, static_cast<int>(s.coarse_P.rows()), levels);
   s.F = s.refinement.faces;

@@ -22,6 +22,9 @@ TEST_CASE("bumpy plane and bar have about the requested size and a valid region"
       CHECK(s.region.num_handles() == 1);
       CHECK(s.heights.maxCoeff() == Approx(s.bump_height).epsilon(0.05));
       CHECK(s.heights.minCoeff() >= 0.0);
+      // Faces are oriented like the analytic normals (outwards on the bar, +z on the plane).
+      const Positions N = vertex_normals(s.smooth, s.F);
+      CHECK(N.cwiseProduct(s.smooth_normals).rowwise().sum().minCoeff() > 0.9);
       // The fine surface is a uniform Loop refinement of the coarse one.
       CHECK(s.refinement.faces.rows() == s.coarse_F.rows() * (1L << (2 * s.refinement.levels)));
       const Eigen::VectorXd row_sums = s.refinement.loop * Eigen::VectorXd::Ones(s.coarse_P.rows());

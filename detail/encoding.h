@@ -2,6 +2,7 @@
 //! \file The detail-encoding interface D = S ⊖ B and reconstruction S' = B' ⊕ D (seed 9.3).
 
 #include <string>
+#include <vector>
 
 #include "core/types.h"
 
@@ -14,12 +15,21 @@ class DetailEncoding {
   virtual ~DetailEncoding() = default;
   //! Short name, e.g. "vectors", "normal".
   virtual std::string name() const = 0;
+  //! Vertices of S that an edit constrains (fixed and handle vertices). Encodings that solve a global
+  //! system for S' (deformation transfer) use them as Dirichlet constraints; the others ignore them.
+  //! Call before encode(). \throw InvalidInput on an index out of range at encode().
+  virtual void set_anchor_vertices(std::vector<int> vertices) { anchors_ = std::move(vertices); }
+  const std::vector<int>& anchor_vertices() const { return anchors_; }
+
   //! S: #Vs by 3 detailed positions with faces Fs; B: #Vb by 3 base positions with faces Fb. Encodings
   //! that need S and B to share connectivity throw InvalidInput when they do not.
   virtual void encode(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) = 0;
   //! Writes S' (#Vs by 3) for the deformed base B' (#Vb by 3) into out.
   //! \throw UsageError before encode() or when B' has the wrong size.
   virtual void reconstruct(const Positions& B_deformed, Positions& out) = 0;
+
+ protected:
+  std::vector<int> anchors_;
 };
 
 }  // namespace msd

@@ -1,1 +1,0 @@
-// Translation unit that keeps the module non-empty; algorithms live in the other files.

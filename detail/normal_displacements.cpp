@@ -1,0 +1,371 @@
+#include "detail/normal_displacements.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <string>
+
+#include "core/errors.h"
+#include "core/parallel.h"
+#include <limits>
+
+#include "detail/closest_point.h"
+
+namespace msd {
+namespace {
+
+// Barycentric coordinates down to −kInsideSlack count as inside the triangle: a root on an edge may land a
+// rounding error outside it, and walking back and forth over the edge would gain nothing.
+constexpr double kInsideSlack = 1e-10;
+// Below this length the interpolated normal m = Σ w_k n_k has no usable direction (unit vertex normals
+// cancelling each other); the face normal stands in.
+constexpr double kMinNormalLength = 1e-12;
+
+void check_finite(const Positions& X, const char* where, const char* what) {
+  if (X.allFinite()) return;
+  for (Eigen::Index v = 0; v < X.rows(); ++v)
+    if (!X.row(v).allFinite())
+      throw InvalidInput(std::string(where) + ": vertex " + std::to_string(v) + " of " + what +
+                         " has a non-finite coordinate");
+}
+
+void check_faces(const Faces& F, Eigen::Index num_vertices, const char* where, const char* what) {
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (F(f, k) < 0 || F(f, k) >= num_vertices)
+        throw InvalidInput(std::string(where) + ": face " + std::to_string(f) + " of " + what +
+                           " has vertex index " + std::to_string(F(f, k)) + " out of range [0, " +
+                           std::to_string(num_vertices) + ")");
+}
+
+// adjacency[3 f + k] = the face across the edge of face f opposite its corner k, or −1 on a boundary
+// or non-manifold edge (where no single neighbour exists to walk to).
+std::vector<int> face_adjacency(const Faces& F, int num_vertices) {
+  std::vector<int> offsets(num_vertices + 1, 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++offsets[F(f, k) + 1];
+  for (int v = 0; v < num_vertices; ++v) offsets[v + 1] += offsets[v];
+  std::vector<int> incident(offsets.back());
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) incident[fill[F(f, k)]++] = static_cast<int>(f);
+
+  std::vector<int> adjacency(3 * F.rows(), -1);
+  parallel_for_chunks(F.rows(), [&](long begin, long end) {
+    for (long f = begin; f < end; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int u = F(f, (k + 1) % 3), w = F(f, (k + 2) % 3);
+        int neighbour = -1, count = 0;
+        for (int i = offsets[u]; i < offsets[u + 1]; ++i) {
+          const int g = incident[i];
+          if (g == f) continue;
+          if (F(g, 0) == w || F(g, 1) == w || F(g, 2) == w) {
+            neighbour = g;
+            ++count;
+          }
+        }
+        adjacency[3 * f + k] = count == 1 ? neighbour : -1;
+      }
+  });
+  return adjacency;
+}
+
+// Rows of a #V by 3 column-major array read straight from its three columns: the per-vertex loops stay
+// free of Eigen block temporaries and inline fully.
+struct Columns {
+  const double* x;
+  const double* y;
+  const double* z;
+  explicit Columns(const Eigen::MatrixX3d& X)
+      : x(X.data()), y(X.data() + X.rows()), z(X.data() + 2 * X.rows()) {}
+  Vec3 row(long i) const { return Vec3(x[i], y[i], z[i]); }
+};
+
+inline Vec3 interpolate(const Columns& X, const int* corners, const Vec3& w) {
+  return w[0] * X.row(corners[0]) + w[1] * X.row(corners[1]) + w[2] * X.row(corners[2]);
+}
+
+// The displacement direction at barycentrics w of a face: the Phong normal (seed 9.3.2), or the unit face
+// normal where the Phong normal vanishes, or zero on a zero-area face with no usable normal.
+inline Vec3 displacement_direction(const Columns& X, const Columns& N, const int* corners, const Vec3& w) {
+  const Vec3 m = interpolate(N, corners, w);
+  const double len = m.norm();
+  if (len > kMinNormalLength) return m / len;
+  const Vec3 a = X.row(corners[0]);
+  const Vec3 n = (X.row(corners[1]) - a).cross(X.row(corners[2]) - a);
+  const double n_len = n.norm();
+  return n_len > 0 ? Vec3(n / n_len) : Vec3::Zero();
+}
+
+// Newton search for one vertex (see the class comment).
+struct BasePointSearch {
+  const Positions& B;
+  const Positions& N;
+  const Faces& F;
+  const std::vector<int>& adjacency;
+  const NormalDisplacementOptions& options;
+  double tolerance;  // absolute
+
+  // From (face, w), finds a root of f = (p − x) × m. On success updates face and w and returns true.
+  bool run(const Vec3& p, int& face, Vec3& w_io, int& iterations, int& walks) const {
+    int f = face;
+    Vec3 w = w_io;
+    iterations = walks = 0;
+    for (;;) {
+      const int ia = F(f, 0), ib = F(f, 1), ic = F(f, 2);
+      const Vec3 a = B.row(ia), b = B.row(ib), c = B.row(ic);
+      const Vec3 na = N.row(ia), nb = N.row(ib), nc = N.row(ic);
+      const Vec3 x = w[0] * a + w[1] * b + w[2] * c;
+      const Vec3 m = w[0] * na + w[1] * nb + w[2] * nc;
+      const Vec3 d = p - x;
+      const double m_len = m.norm();
+      if (!(m_len > kMinNormalLength)) return false;
+      const Vec3 r = d.cross(m);
+      if (w.minCoeff() >= -kInsideSlack && r.norm() <= tolerance * m_len) {
+        face = f;
+        w_io = w;
+        return true;
+      }
+      if (iterations - walks >= options.max_iterations) return false;
+      ++iterations;
+      // Gauss–Newton on the 3×2 Jacobian of r(α, β) with γ = 1 − α − β: x_α = a − c, m_α = n_a − n_c.
+      const Vec3 ja = d.cross(na - nc) - (a - c).cross(m);
+      const Vec3 jb = d.cross(nb - nc) - (b - c).cross(m);
+      const double A = ja.squaredNorm(), Bc = ja.dot(jb), C = jb.squaredNorm();
+      const double det = A * C - Bc * Bc;
+      if (!(det > 1e-24 * A * C)) return false;  // rank-deficient: p sits near a focal point of B
+      const double ga = ja.dot(r), gb = jb.dot(r);
+      const double da = -(C * ga - Bc * gb) / det, db = -(A * gb - Bc * ga) / det;
+      const Vec3 step(da, db, -da - db);
+      const Vec3 next = w + step;
+      if (next.minCoeff() >= -kInsideSlack) {
+        w = next;
+        continue;
+      }
+      // The step leaves the triangle: stop where it crosses the first edge (seed: "proceed to the
+      // respective neighbouring triangle").
+      double t = 1;
+      int k = 0;
+      for (int j = 0; j < 3; ++j)
+        if (next[j] < -kInsideSlack && step[j] < 0) {
+          const double tj = std::max(w[j], 0.0) / -step[j];
+          if (tj < t) t = tj, k = j;
+        }
+      w += t * step;
+      w[k] = 0;
+      const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+      w[k1] = std::max(w[k1], 0.0);
+      w[k2] = std::max(w[k2], 0.0);
+      const double sum = w[k1] + w[k2];
+      if (!(sum > 0)) return false;
+      w[k1] /= sum;
+      w[k2] /= sum;
+      const int g = adjacency[3 * f + k];
+      if (g < 0) continue;  // boundary edge: stay on it; the iteration cap ends a search pushing outwards
+      if (++walks > options.max_walks) return false;
+      const int u = F(f, k1), v = F(f, k2);
+      const double wu = w[k1], wv = w[k2];
+      for (int j = 0; j < 3; ++j) w[j] = F(g, j) == u ? wu : F(g, j) == v ? wv : 0.0;
+      f = g;
+    }
+  }
+
+  // Second chance for a search that failed (e.g. a root exactly on a vertex or edge, where walking
+  // ping-pongs between triangles): projected Gauss–Newton confined to face f, started at its centre.
+  // On success sets w and returns true.
+  bool run_in_triangle(const Vec3& p, int f, Vec3& w) const {
+    const int ia = F(f, 0), ib = F(f, 1), ic = F(f, 2);
+    const Vec3 a = B.row(ia), b = B.row(ib), c = B.row(ic);
+    const Vec3 na = N.row(ia), nb = N.row(ib), nc = N.row(ic);
+    w = Vec3::Constant(1.0 / 3.0);
+    for (int it = 0; it <= options.max_iterations; ++it) {
+      const Vec3 x = w[0] * a + w[1] * b + w[2] * c;
+      const Vec3 m = w[0] * na + w[1] * nb + w[2] * nc;
+      const Vec3 d = p - x;
+      const double m_len = m.norm();
+      if (!(m_len > kMinNormalLength)) return false;
+      const Vec3 r = d.cross(m);
+      if (r.norm() <= tolerance * m_len) return true;
+      const Vec3 ja = d.cross(na - nc) - (a - c).cross(m);
+      const Vec3 jb = d.cross(nb - nc) - (b - c).cross(m);
+      const double A = ja.squaredNorm(), Bc = ja.dot(jb), C = jb.squaredNorm();
+      const double det = A * C - Bc * Bc;
+      if (!(det > 1e-24 * A * C)) return false;
+      const double ga = ja.dot(r), gb = jb.dot(r);
+      const double da = -(C * ga - Bc * gb) / det, db = -(A * gb - Bc * ga) / det;
+      w += Vec3(da, db, -da - db);
+      w = w.cwiseMax(0.0);  // project back onto the triangle
+      const double sum = w.sum();
+      if (!(sum > 0)) return false;
+      w /= sum;
+    }
+    return false;
+  }
+};
+
+}  // namespace
+
+NormalDisplacements::NormalDisplacements(const NormalDisplacementOptions& options) : options_(options) {}
+
+void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const Positions& B,
+                                 const Faces& Fb) {
+  const char* where = "NormalDisplacements::encode";
+  if (options_.max_iterations < 0 || options_.max_walks < 0 || !(options_.tolerance > 0) ||
+      !std::isfinite(options_.tolerance))
+    throw InvalidInput(std::string(where) +
+                       ": options need max_iterations >= 0, max_walks >= 0 and a finite tolerance > 0");
+  if (Fb.rows() == 0) throw InvalidInput(std::string(where) + ": the base mesh B has no face");
+  check_faces(Fb, B.rows(), where, "B");
+  check_finite(S, where, "S");
+  check_finite(B, where, "B");
+
+  const int nb = static_cast<int>(B.rows());
+  const long ns = static_cast<long>(S.rows());
+  num_base_vertices_ = -1;  // stays "not encoded" if anything below throws
+  VertexNormals normals(Fb, nb);
+  Positions N;
+  normals.compute(B, N);
+  const std::vector<int> adjacency = face_adjacency(Fb, nb);
+  const ClosestPointQuery closest(B, Fb);
+  const BasePointSearch search{B, N, Fb, adjacency, options_, options_.tolerance * bounding_box_diagonal(B)};
+  // Faces around each base vertex, for the second-chance search.
+  std::vector<int> star_offsets(nb + 1, 0), star;
+  for (Eigen::Index f = 0; f < Fb.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++star_offsets[Fb(f, k) + 1];
+  for (int v = 0; v < nb; ++v) star_offsets[v + 1] += star_offsets[v];
+  star.resize(star_offsets.back());
+  {
+    std::vector<int> fill(star_offsets.begin(), star_offsets.end() - 1);
+    for (Eigen::Index f = 0; f < Fb.rows(); ++f)
+      for (int k = 0; k < 3; ++k) star[fill[Fb(f, k)]++] = static_cast<int>(f);
+  }
+
+  const Columns Bc(B), Nc(N);
+  Eigen::VectorXi face(ns);
+  Eigen::MatrixX3d barycentric(ns, 3);
+  Eigen::VectorXd height(ns);
+  std::vector<char> ok(ns, 0);
+  std::vector<int> iterations(ns, 0), walks(ns, 0);
+  parallel_for_chunks(
+      ns,
+      [&](long begin, long end) {
+        for (long i = begin; i < end; ++i) {
+          const Vec3 p = S.row(i);
+          const ClosestPoint start = closest.query(p);
+          int f = start.face;
+          Vec3 w = start.barycentric;
+          ok[i] = search.run(p, f, w, iterations[i], walks[i]);
+          if (!ok[i]) {
+            // Second chance: each face around the closest triangle's corners on its own; keep the root
+            // nearest to p.
+            double best = std::numeric_limits<double>::infinity();
+            for (int k = 0; k < 3; ++k) {
+              const int v = Fb(start.face, k);
+              for (int j = star_offsets[v]; j < star_offsets[v + 1]; ++j) {
+                Vec3 wt;
+                if (!search.run_in_triangle(p, star[j], wt)) continue;
+                const double dist = (p - interpolate(Bc, &Fb(star[j], 0), wt)).squaredNorm();
+                if (dist < best) best = dist, f = star[j], w = wt, ok[i] = 1;
+              }
+            }
+          }
+          if (!ok[i]) {  // fall back to the closest point
+            f = start.face;
+            w = start.barycentric;
+          }
+          face[i] = f;
+          barycentric.row(i) = w;
+          const int* corners = &Fb(f, 0);
+          height[i] = (p - interpolate(Bc, corners, w)).dot(displacement_direction(Bc, Nc, corners, w));
+        }
+      },
+      512);
+
+  EncodeReport report;
+  for (long i = 0; i < ns; ++i) {
+    report.walks += walks[i];
+    if (ok[i]) {
+      ++report.converged;
+      report.max_iterations_used = std::max(report.max_iterations_used, iterations[i] - walks[i]);
+    } else {
+      ++report.fallback;
+      report.fallback_vertices.push_back(static_cast<int>(i));
+    }
+  }
+
+  // Counting sort of the samples by base face (stable: vertex order within a face).
+  std::vector<int> first(Fb.rows() + 1, 0);
+  for (long i = 0; i < ns; ++i) ++first[face[i] + 1];
+  for (Eigen::Index f = 0; f < Fb.rows(); ++f) first[f + 1] += first[f];
+  std::vector<Sample> samples(ns);
+  for (long i = 0; i < ns; ++i)
+    samples[first[face[i]]++] = Sample{
+        face[i], static_cast<int>(i), {barycentric(i, 0), barycentric(i, 1), barycentric(i, 2)}, height[i]};
+
+  samples_ = std::move(samples);
+  base_faces_ = Fb;
+  normals_ = std::move(normals);
+  normal_buffer_ = std::move(N);
+  face_ = std::move(face);
+  barycentric_ = std::move(barycentric);
+  height_ = std::move(height);
+  report_ = std::move(report);
+  num_base_vertices_ = nb;
+}
+
+void NormalDisplacements::base_points(const Positions& B, Positions& out) const {
+  if (!encoded()) throw UsageError("NormalDisplacements::base_points: called before encode()");
+  if (B.rows() != num_base_vertices_)
+    throw UsageError("NormalDisplacements::base_points: base has " + std::to_string(B.rows()) +
+                     " vertices, the encoded base had " + std::to_string(num_base_vertices_));
+  const long ns = static_cast<long>(face_.size());
+  if (out.rows() != ns) out.resize(ns, 3);
+  const Columns Bc(B), W(barycentric_);
+  parallel_for_chunks(ns, [&](long begin, long end) {
+    for (long i = begin; i < end; ++i) out.row(i) = interpolate(Bc, &base_faces_(face_[i], 0), W.row(i));
+  });
+}
+
+void NormalDisplacements::reconstruct(const Positions& B_deformed, Positions& out) {
+  if (!encoded()) throw UsageError("NormalDisplacements::reconstruct: called before encode()");
+  if (B_deformed.rows() != num_base_vertices_)
+    throw UsageError("NormalDisplacements::reconstruct: deformed base has " +
+                     std::to_string(B_deformed.rows()) + " vertices, the encoded base had " +
+                     std::to_string(num_base_vertices_));
+  normals_.compute(B_deformed, normal_buffer_);
+  const long ns = static_cast<long>(face_.size());
+  if (out.rows() != ns) out.resize(ns, 3);
+  const Columns Bc(B_deformed), Nc(normal_buffer_);
+  double* const ox = out.data();
+  double* const oy = ox + ns;
+  double* const oz = oy + ns;
+  std::atomic<bool> finite{true};
+  // Samples run in face order, so consecutive reads of B' stay close in memory.
+  parallel_for_chunks(ns, [&](long begin, long end) {
+    bool chunk_finite = true;
+    for (long k = begin; k < end; ++k) {
+      const Sample& s = samples_[k];
+      const int* corners = &base_faces_(s.face, 0);
+      const Vec3 w(s.w[0], s.w[1], s.w[2]);
+      const Vec3 p = interpolate(Bc, corners, w) + s.h * displacement_direction(Bc, Nc, corners, w);
+      ox[s.vertex] = p.x();
+      oy[s.vertex] = p.y();
+      oz[s.vertex] = p.z();
+      chunk_finite = chunk_finite && p.allFinite();
+    }
+    if (!chunk_finite) finite = false;
+  });
+  if (!finite) {
+    check_finite(B_deformed, "NormalDisplacements::reconstruct", "the deformed base");
+    throw InvalidInput("NormalDisplacements::reconstruct: non-finite result from a finite base (overflow?)");
+  }
+}
+
+Eigen::VectorXd normal_displacement_heights(const Positions& S, const Positions& B, const Faces& Fb,
+                                            const NormalDisplacementOptions& options) {
+  NormalDisplacements encoding(options);
+  encoding.encode(S, Faces(), B, Fb);
+  return encoding.heights();
+}
+
+}  // namespace msd

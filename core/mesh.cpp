@@ -118,10 +118,21 @@ VertexNormals::VertexNormals(const Faces& F, int num_vertices) {
 }
 
 void VertexNormals::compute(const Positions& P, Positions& N) const {
-  const long nv = static_cast<long>(kind_.size());
-  if (N.rows() != nv) N.resize(nv, 3);
-  const double *px = P.col(0).data(), *py = P.col(1).data(), *pz = P.col(2).data();
+  if (N.rows() != static_cast<Eigen::Index>(kind_.size())) N.resize(kind_.size(), 3);
   double *nx = N.col(0).data(), *ny = N.col(1).data(), *nz = N.col(2).data();
+  compute_into(P, [=](long v, double x, double y, double z) { nx[v] = x, ny[v] = y, nz[v] = z; });
+}
+
+void VertexNormals::compute(const Positions& P, RowPositions& N) const {
+  if (N.rows() != static_cast<Eigen::Index>(kind_.size())) N.resize(kind_.size(), 3);
+  double* n = N.data();
+  compute_into(P, [=](long v, double x, double y, double z) { n[3 * v] = x, n[3 * v + 1] = y, n[3 * v + 2] = z; });
+}
+
+template <class Store>
+void VertexNormals::compute_into(const Positions& P, Store store) const {
+  const long nv = static_cast<long>(kind_.size());
+  const double *px = P.col(0).data(), *py = P.col(1).data(), *pz = P.col(2).data();
   parallel_for_chunks(nv, [&](long b, long e) {
     for (long v = b; v < e; ++v) {
       const int* r = ring_.data() + offsets_[v];
@@ -150,9 +161,7 @@ void VertexNormals::compute(const Positions& P, Positions& N) const {
       }
       const double norm = std::sqrt(sx * sx + sy * sy + sz * sz);
       const double inv = norm > 0 ? 1.0 / norm : 0.0;
-      nx[v] = sx * inv;
-      ny[v] = sy * inv;
-      nz[v] = sz * inv;
+      store(v, sx * inv, sy * inv, sz * inv);
     }
   });
 }

@@ -44,8 +44,12 @@ class VertexNormals {
   VertexNormals(const Faces& F, int num_vertices);
   //! Unit normals of positions P (#V by 3) into N (#V by 3, resized only when its size is wrong).
   void compute(const Positions& P, Positions& N) const;
+  //! The same into a row-major buffer, for callers that then gather normals by vertex.
+  void compute(const Positions& P, RowPositions& N) const;
 
  private:
+  template <class Store>
+  void compute_into(const Positions& P, Store store) const;
   enum Kind : unsigned char { kIsolated, kClosedFan, kOpenFan, kFacePairs };
   std::vector<int> offsets_, ring_;  // per vertex: its ring (closed or open fan) or (j, k) pairs of its faces
   std::vector<unsigned char> kind_;

@@ -20,6 +20,8 @@ struct SceneOptions {
   double bump_height = 0.05;  //!< height of the smooth bumps
   double bump_radius = 0.045; //!< radius of each bump (bumps sit on a 0.1 lattice and do not overlap)
   double bar_radius = 0.15;   //!< radius of the bumpy bar (a tube along x of length 1)
+  double fixed_end = 0.2;     //!< vertices with x below this are fixed
+  double handle_start = 0.8;  //!< vertices with x above this are the handle (the free region lies between)
 };
 
 //! A deformation benchmark: the detailed surface, its region, and one transform per handle.
@@ -30,7 +32,7 @@ struct Scene {
   Positions smooth;  //!< #V by 3 the same surface without bumps (the analytic base surface)
   Positions smooth_normals;  //!< #V by 3 analytic unit normals of `smooth`
   Eigen::VectorXd heights;   //!< #V analytic bump heights: P = smooth + heights * smooth_normals
-  Region region;             //!< fixed x < 0.2, handle x > 0.8, free between
+  Region region;             //!< fixed x < fixed_end, handle x > handle_start, free between
   std::vector<Mat4> transforms;  //!< one rigid transform for the handle
   // The coarse control mesh the surface was refined from (for subdivision-based hierarchies).
   Positions coarse_P;

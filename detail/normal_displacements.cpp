@@ -81,13 +81,22 @@ struct Columns {
   Vec3 row(long i) const { return Vec3(x[i], y[i], z[i]); }
 };
 
-inline Vec3 interpolate(const Columns& X, const int* corners, const Vec3& w) {
+// Rows of a #V by 3 row-major array.
+struct Rows {
+  const double* p;
+  explicit Rows(const RowPositions& X) : p(X.data()) {}
+  Vec3 row(long i) const { return Vec3(p[3 * i], p[3 * i + 1], p[3 * i + 2]); }
+};
+
+template <class Points>
+inline Vec3 interpolate(const Points& X, const int* corners, const Vec3& w) {
   return w[0] * X.row(corners[0]) + w[1] * X.row(corners[1]) + w[2] * X.row(corners[2]);
 }
 
 // The displacement direction at barycentrics w of a face: the Phong normal (seed 9.3.2), or the unit face
 // normal where the Phong normal vanishes, or zero on a zero-area face with no usable normal.
-inline Vec3 displacement_direction(const Columns& X, const Columns& N, const int* corners, const Vec3& w) {
+template <class Normals>
+inline Vec3 displacement_direction(const Columns& X, const Normals& N, const int* corners, const Vec3& w) {
   const Vec3 m = interpolate(N, corners, w);
   const double len = m.norm();
   if (len > kMinNormalLength) return m / len;
@@ -305,7 +314,7 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
   samples_ = std::move(samples);
   base_faces_ = Fb;
   normals_ = std::move(normals);
-  normal_buffer_ = std::move(N);
+  normal_buffer_ = N;
   face_ = std::move(face);
   barycentric_ = std::move(barycentric);
   height_ = std::move(height);
@@ -335,7 +344,8 @@ void NormalDisplacements::reconstruct(const Positions& B_deformed, Positions& ou
   normals_.compute(B_deformed, normal_buffer_);
   const long ns = static_cast<long>(face_.size());
   if (out.rows() != ns) out.resize(ns, 3);
-  const Columns Bc(B_deformed), Nc(normal_buffer_);
+  const Columns Bc(B_deformed);
+  const Rows Nc(normal_buffer_);
   double* const ox = out.data();
   double* const oy = ox + ns;
   double* const oz = oy + ns;

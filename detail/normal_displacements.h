@@ -80,7 +80,7 @@ class NormalDisplacements : public DetailEncoding {
   Faces base_faces_;
   int num_base_vertices_ = -1;
   VertexNormals normals_;
-  Positions normal_buffer_;  // #Vb by 3, per-frame vertex normals of B'
+  RowPositions normal_buffer_;  // #Vb by 3, per-frame vertex normals of B' (row-major: gathered per corner)
   // The encoding once more, sorted by base face: reconstruct() then reads B' and its normals almost
   // sequentially (the vertex order of S, e.g. of a Loop-refined mesh, scatters them).
   struct Sample {

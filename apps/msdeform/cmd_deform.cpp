@@ -6,6 +6,7 @@
 #include "apps/msdeform/deformers.h"
 #include "apps/msdeform/edit_case.h"
 #include "core/errors.h"
+#include "analysis/metrics.h"
 #include "core/mesh_io.h"
 
 namespace msd::cli {
@@ -39,7 +40,7 @@ void add_deform_command(CLI::App& app) {
     save_mesh(out, faces(c.mesh), *output);
     std::printf("%s on %s: %ld vertices (%zu free, %d handle(s))\n", deformer->name().c_str(), c.name.c_str(),
                 long(rest.rows()), c.region.free_vertices().size(), c.region.num_handles());
-    std::printf("  prepare %.1f ms, frame %.2f ms, handle error %.3g\n", prepare_ms, frame_ms, handle_error(c, rest, out));
+    std::printf("  prepare %.1f ms, frame %.2f ms, handle error %.3g\n", prepare_ms, frame_ms, handle_error(rest, out, c.region, c.transforms));
     std::printf("  wrote %s\n", output->c_str());
   });
 }

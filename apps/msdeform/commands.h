@@ -8,5 +8,7 @@ namespace msd::cli {
 void add_info_command(CLI::App& app);
 void add_scene_command(CLI::App& app);
 void add_deform_command(CLI::App& app);
+void add_decompose_command(CLI::App& app);
+void add_compare_command(CLI::App& app);
 
 }  // namespace msd::cli

@@ -1,24 +1,66 @@
 #include "apps/msdeform/deformers.h"
 
-#include "core/errors.h"
+#include <map>
+
+#include "reconstruction/multiscale.h"
 
 namespace msd::cli {
 
-std::vector<std::string> deformer_names() { return {"shell"}; }
+namespace {
+std::string joined(const std::vector<std::string>& names, const char* sep) {
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : sep) + n;
+  return out;
+}
+}  // namespace
 
 void DeformerOptions::add_to(CLI::App& cmd) {
-  std::string names;
-  for (const auto& n : deformer_names()) names += (names.empty() ? "" : "|") + n;
-  cmd.add_option("--method", method, "Editing method: " + names)->capture_default_str();
-  cmd.add_option("--ks", shell.ks, "shell: stretching stiffness (membrane)")->capture_default_str();
-  cmd.add_option("--kb", shell.kb, "shell: bending stiffness (thin plate)")->capture_default_str();
+  cmd.add_option("--method", method, "Editing method: shell|propagate|multiscale (with --encoding), or a full name: " +
+                                         joined(method_names(), "|"))
+      ->capture_default_str();
+  auto* shell = cmd.add_option_group("shell", "shell and multiscale: the thin-shell operator (9.2)");
+  shell->add_option("--ks", options.shell.ks, "stretching stiffness (membrane)")->capture_default_str();
+  shell->add_option("--kb", options.shell.kb, "bending stiffness (thin plate)")->capture_default_str();
+  auto* prop = cmd.add_option_group("propagate", "propagate: transformation propagation (9.1)");
+  prop->add_option("--field", options.propagation.field, "blend field: euclidean, geodesic or harmonic")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, PropagationField>{{"euclidean", PropagationField::Euclidean},
+                                                  {"geodesic", PropagationField::Geodesic},
+                                                  {"harmonic", PropagationField::Harmonic}},
+          CLI::ignore_case))
+      ->default_str("harmonic");
+  prop->add_option("--blend", options.propagation.blend,
+                   "matrix (s T(p) + (1-s) p) or decomposed (slerp rotation, scale/shear, translation)")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, PropagationBlend>{{"matrix", PropagationBlend::Matrix},
+                                                  {"decomposed", PropagationBlend::Decomposed}},
+          CLI::ignore_case))
+      ->default_str("matrix");
+  prop->add_option("--transfer", options.propagation.transfer, "transfer function of s: linear or smoothstep")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, PropagationTransfer>{{"linear", PropagationTransfer::Linear},
+                                                     {"smoothstep", PropagationTransfer::SmoothStep}},
+          CLI::ignore_case))
+      ->default_str("linear");
+  auto* ms = cmd.add_option_group("multiscale", "multiscale: decompose, deform the base, add the details back (9.3)");
+  ms->add_option("--encoding", encoding, "detail encoding: " + joined(encoding_names(), "|"))->capture_default_str();
+  ms->add_option("--fairing", fairing_order, "fairing order of the base: 1 membrane, 2 thin plate, 3 minimum variation")
+      ->check(CLI::Range(1, 3))
+      ->capture_default_str();
+  ms->add_option("--remesh-base", options.remesh_base_edge_length,
+                 "remesh the base isotropically to this edge length before encoding (0: keep S's triangles)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
 }
 
-std::unique_ptr<Deformer> DeformerOptions::make() const {
-  if (method == "shell") return std::make_unique<ShellDeformer>(shell);
-  std::string names;
-  for (const auto& n : deformer_names()) names += (names.empty() ? "" : ", ") + n;
-  throw InvalidInput("unknown method '" + method + "' (known: " + names + ")");
+std::string DeformerOptions::method_name() const { return method == "multiscale" ? "multiscale-" + encoding : method; }
+
+MethodOptions DeformerOptions::method_options() const {
+  MethodOptions o = options;
+  o.fairing = static_cast<FairingOrder>(fairing_order);
+  return o;
 }
+
+std::unique_ptr<Deformer> DeformerOptions::make() const { return make_deformer(method_name(), method_options()); }
 
 }  // namespace msd::cli

@@ -1,25 +1,27 @@
 #pragma once
-// The editing methods the command line can run, by name, with their options.
+// Command-line options that choose and configure an editing method (see reconstruction/registry.h).
 
 #include <memory>
 #include <string>
-#include <vector>
 
 #include <CLI/CLI.hpp>
 
-#include "deformation/deformer.h"
-#include "deformation/shell.h"
+#include "reconstruction/registry.h"
 
 namespace msd::cli {
 
 struct DeformerOptions {
   std::string method = "shell";
-  ShellOptions shell;
+  std::string encoding = "normal";
+  int fairing_order = 2;
+  MethodOptions options;
   void add_to(CLI::App& cmd);
-  // The named method, configured. Throws InvalidInput for an unknown name, listing the known ones.
+  // The registry name: --method, with "multiscale" completed by --encoding.
+  std::string method_name() const;
+  // The chosen method, configured. Throws InvalidInput for an unknown name, listing the known ones.
   std::unique_ptr<Deformer> make() const;
+  // The options alone, with the fairing order applied (for runs of several methods).
+  MethodOptions method_options() const;
 };
-
-std::vector<std::string> deformer_names();
 
 }  // namespace msd::cli

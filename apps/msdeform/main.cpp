@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   msd::cli::add_scene_command(app);
   msd::cli::add_deform_command(app);
   msd::cli::add_decompose_command(app);
+  msd::cli::add_compare_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,169 @@
+#include "analysis/comparison.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include "analysis/self_intersections.h"
+#include "core/errors.h"
+#include "core/mesh_io.h"
+#include "core/scenes.h"
+
+namespace msd {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+std::string format(const char* fmt, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), fmt, x);
+  return buf;
+}
+
+}  // namespace
+
+EditCase scene_case(const std::string& scene, int resolution) {
+  SceneOptions options;
+  options.resolution = resolution;
+  Scene s = make_scene(scene, options);
+  return {s.name, make_mesh(s.P, s.F), std::move(s.region), std::move(s.transforms)};
+}
+
+EditCase file_case(const std::string& mesh, const std::string& sel, const std::string& def) {
+  EditCase c;
+  c.name = std::filesystem::path(mesh).stem().string();
+  c.mesh = load_mesh(mesh);
+  const int nv = static_cast<int>(c.mesh.n_vertices());
+  c.region = file_extension(sel) == ".dmat" ? read_dmat_groups(sel, nv) : read_sel(sel, nv);
+  c.transforms = read_def(def);
+  if (static_cast<int>(c.transforms.size()) != c.region.num_handles())
+    throw InvalidInput(def + " has " + std::to_string(c.transforms.size()) + " matrices but " + sel + " defines " +
+                       std::to_string(c.region.num_handles()) + " handle(s)");
+  return c;
+}
+
+void check_method_names(const std::vector<std::string>& methods) {
+  if (methods.empty()) throw InvalidInput("no method to compare");
+  for (const auto& m : methods) make_deformer(m);  // throws for an unknown name, listing the known ones
+}
+
+std::vector<MethodResult> compare_methods(const EditCase& edit, const ComparisonOptions& options) {
+  check_method_names(options.methods);
+  const Positions rest = positions(edit.mesh);
+  const Faces F = faces(edit.mesh);
+  std::vector<MethodResult> results;
+  for (const auto& method : options.methods) {
+    MethodResult r;
+    r.scene = edit.name;
+    r.method = method;
+    r.vertices = static_cast<int>(rest.rows());
+    try {
+      auto deformer = make_deformer(method, options.method_options);
+      auto t0 = Clock::now();
+      deformer->prepare(edit.mesh, edit.region);
+      r.prepare_ms = ms_since(t0);
+      deformer->deform(edit.transforms, r.result);  // warm-up
+      std::vector<double> frames;
+      for (int f = 0; f < std::max(1, options.timed_frames); ++f) {
+        t0 = Clock::now();
+        deformer->deform(edit.transforms, r.result);
+        frames.push_back(ms_since(t0));
+      }
+      std::sort(frames.begin(), frames.end());
+      r.frame_ms = frames[frames.size() / 2];
+      if (!r.result.allFinite()) throw SolverError(method + " produced non-finite positions");
+      r.handle_error = handle_error(rest, r.result, edit.region, edit.transforms);
+      r.rigidity = rigidity_error(rest, r.result, F).stats;
+      const DetailDistortion d = detail_distortion(rest, r.result, F, edit.region);
+      r.distortion = d.stats;
+      r.distortion_per_vertex = d.per_vertex;
+      if (options.self_intersections) r.self_intersections = count_self_intersections(r.result, F);
+      r.volume_change = volume_change(rest, r.result, F);
+      r.ok = true;
+    } catch (const std::exception& e) {
+      r.ok = false;
+      r.error = e.what();
+    }
+    if (options.progress)
+      options.progress(edit.name + " / " + method + ": " +
+                       (r.ok ? format("prepare %.0f ms", r.prepare_ms) + format(", frame %.2f ms", r.frame_ms)
+                             : "FAILED: " + r.error));
+    results.push_back(std::move(r));
+  }
+  return results;
+}
+
+namespace {
+
+struct Column {
+  const char* name;
+  std::function<std::string(const MethodResult&)> value;
+};
+
+std::vector<Column> columns() {
+  auto g = [](double x) { return format("%.4g", x); };
+  return {
+      {"scene", [](const MethodResult& r) { return r.scene; }},
+      {"method", [](const MethodResult& r) { return r.method; }},
+      {"vertices", [](const MethodResult& r) { return std::to_string(r.vertices); }},
+      {"ok", [](const MethodResult& r) { return std::string(r.ok ? "yes" : "no"); }},
+      {"prepare_ms", [=](const MethodResult& r) { return g(r.prepare_ms); }},
+      {"frame_ms", [=](const MethodResult& r) { return g(r.frame_ms); }},
+      {"handle_error", [=](const MethodResult& r) { return g(r.handle_error); }},
+      {"rigidity_mean", [=](const MethodResult& r) { return g(r.rigidity.mean); }},
+      {"rigidity_p95", [=](const MethodResult& r) { return g(r.rigidity.p95); }},
+      {"rigidity_max", [=](const MethodResult& r) { return g(r.rigidity.max); }},
+      {"distortion_mean", [=](const MethodResult& r) { return g(r.distortion.mean); }},
+      {"distortion_p95", [=](const MethodResult& r) { return g(r.distortion.p95); }},
+      {"distortion_max", [=](const MethodResult& r) { return g(r.distortion.max); }},
+      {"self_intersections", [](const MethodResult& r) { return std::to_string(r.self_intersections); }},
+      {"volume_change", [=](const MethodResult& r) { return r.volume_change ? g(*r.volume_change) : std::string("n/a"); }},
+      {"error", [](const MethodResult& r) { return r.error; }},
+  };
+}
+
+}  // namespace
+
+std::string metrics_csv(const std::vector<MethodResult>& results) {
+  const auto cols = columns();
+  std::string out;
+  for (size_t c = 0; c < cols.size(); ++c) out += (c ? "," : "") + std::string(cols[c].name);
+  out += '\n';
+  for (const auto& r : results) {
+    for (size_t c = 0; c < cols.size(); ++c) {
+      std::string v = cols[c].value(r);
+      if (v.find_first_of(",\"\n") != std::string::npos) {  // quote per RFC 4180
+        std::string q = "\"";
+        for (char ch : v) q += ch == '"' ? std::string("\"\"") : std::string(1, ch == '\n' ? ' ' : ch);
+        v = q + "\"";
+      }
+      out += (c ? "," : "") + v;
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+std::string metrics_markdown(const std::vector<MethodResult>& results) {
+  const auto cols = columns();
+  std::string out = "|";
+  for (const auto& c : cols) out += std::string(" ") + c.name + " |";
+  out += "\n|";
+  for (size_t c = 0; c < cols.size(); ++c) out += "---|";
+  out += '\n';
+  for (const auto& r : results) {
+    out += "|";
+    for (const auto& c : cols) {
+      std::string v = c.value(r);
+      for (auto& ch : v)
+        if (ch == '|' || ch == '\n') ch = ' ';
+      out += " " + v + " |";
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+}  // namespace msd

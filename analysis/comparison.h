@@ -1,0 +1,68 @@
+#pragma once
+//! \file Running several editing methods on one edit and measuring each result: the engine of
+//! `msdeform compare` and of the bumpy-plane regression suite.
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "analysis/metrics.h"
+#include "core/mesh.h"
+#include "core/region.h"
+#include "reconstruction/registry.h"
+
+namespace msd {
+
+//! An edit to run: a mesh, its region and one transform per handle.
+struct EditCase {
+  std::string name;
+  Mesh mesh;
+  Region region;
+  std::vector<Mat4> transforms;
+};
+
+//! A built-in scene (core/scenes.h) as an edit case. \throw InvalidInput for an unknown name.
+EditCase scene_case(const std::string& scene, int resolution);
+//! A mesh file with a .sel (or .dmat) region and a .def file. \throw InvalidInput naming the file, or
+//! the mismatch between the handle count of the region and the number of matrices.
+EditCase file_case(const std::string& mesh, const std::string& sel, const std::string& def);
+
+//! What one method did on one edit case.
+struct MethodResult {
+  std::string scene, method;
+  int vertices = 0;
+  bool ok = false;
+  std::string error;  //!< why the method failed (ok = false)
+  double prepare_ms = 0, frame_ms = 0;  //!< prepare(), and the median of the timed frames
+  double handle_error = 0;              //!< max |p' − T p| over handle and fixed vertices
+  Stats rigidity;                       //!< one-ring rotation residual (rigidity_error)
+  Stats distortion;                     //!< detail distortion, relative to the largest detail height
+  int self_intersections = -1;          //!< intersecting face pairs (-1: not measured)
+  std::optional<double> volume_change;  //!< relative, for closed meshes
+  Positions result;                     //!< #V by 3 deformed positions
+  Eigen::VectorXd distortion_per_vertex;  //!< #V |Δh| in scene units
+};
+
+struct ComparisonOptions {
+  std::vector<std::string> methods = method_names();  //!< registry names (reconstruction/registry.h)
+  MethodOptions method_options;
+  int timed_frames = 3;            //!< frames timed after one warm-up frame
+  bool self_intersections = true;  //!< count intersecting face pairs (CGAL; the costliest metric)
+  //! Called with a line of progress (which scene, which method, how long).
+  std::function<void(const std::string&)> progress;
+};
+
+//! Checks that every method name is known, before any work. \throw InvalidInput naming the first unknown.
+void check_method_names(const std::vector<std::string>& methods);
+
+//! Runs each method on the case and measures the result. A method that throws is recorded with
+//! ok = false and its message; the others still run.
+std::vector<MethodResult> compare_methods(const EditCase& edit, const ComparisonOptions& options);
+
+//! The results as a CSV table (one row per result, a header line first).
+std::string metrics_csv(const std::vector<MethodResult>& results);
+//! The results as a Markdown table.
+std::string metrics_markdown(const std::vector<MethodResult>& results);
+
+}  // namespace msd

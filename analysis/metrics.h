@@ -1,0 +1,133 @@
+#pragma once
+//! \file Metrics of a deformation result (design.md §6): handle error, rigidity error (ARAP residual of
+//! the one-rings), detail distortion (change of normal-displacement heights over faired bases), volume
+//! change of closed meshes, and distance to a reference result. All functions take bulk arrays (#V by 3
+//! positions, #F by 3 faces); none modifies its input.
+
+#include <optional>
+#include <vector>
+
+#include "core/region.h"
+#include "core/types.h"
+#include "decomposition/fairing.h"
+
+namespace msd {
+
+//! Summary of a per-vertex error over a set of vertices.
+struct Stats {
+  double mean = 0;
+  double p95 = 0;  //!< 95th percentile (nearest rank)
+  double max = 0;
+  int count = 0;  //!< how many values were summarised
+};
+
+//! Mean, 95th percentile and maximum of values (all entries). All zero for an empty vector.
+Stats summarize(const Eigen::VectorXd& values);
+//! The same over values[subset] (indices into values). \throw InvalidInput for an index out of range.
+Stats summarize(const Eigen::VectorXd& values, const std::vector<int>& subset);
+
+// ---------------------------------------------------------------------------------------------------
+// Handle error
+
+//! How far the constraints are from being met: the largest |p' − T_k p| over vertices of handle k and
+//! |p' − p| over fixed vertices, in scene units (0 when the region has no constrained vertex).
+//! rest, deformed: #V by 3; region: #V codes; transforms: at least region.num_handles() affine 4x4.
+//! \throw InvalidInput if the row counts differ from each other or from the region, or if there are
+//! fewer transforms than handles.
+double handle_error(const Positions& rest, const Positions& deformed, const Region& region,
+                    const std::vector<Mat4>& transforms);
+
+// ---------------------------------------------------------------------------------------------------
+// Rigidity error
+
+//! Edge weights w_ij of the one-ring rigidity fit.
+enum class RigidityWeights {
+  //! Cotangent weights (cot α + cot β)/2 of the rest mesh, as in ARAP; negative weights (obtuse
+  //! triangles) are clamped to 0. A vertex whose clamped weights all vanish falls back to uniform.
+  Cotan,
+  Uniform,  //!< w_ij = 1
+};
+
+struct RigidityOptions {
+  RigidityWeights weights = RigidityWeights::Cotan;
+};
+
+//! Per-vertex rigidity error and its summary.
+struct RigidityError {
+  //! #V values e_i = min_R Σ_j w_ij |(p'_i − p'_j) − R (p_i − p_j)|² / Σ_j w_ij |p_i − p_j|², R a rotation
+  //! (the local step of ARAP, Sorkine & Alexa 2007). Dimensionless and invariant to a common scaling of
+  //! rest and deformed. 0 exactly for a rigid motion of the one-ring; a uniform scaling by s gives
+  //! (s − 1)², so a 10% stretch reads 0.01; a reflection does not count as rigid. Isolated vertices get 0.
+  Eigen::VectorXd per_vertex;
+  Stats stats;  //!< over all vertices with at least one neighbour
+};
+
+//! Rigidity error of deformed against rest (both #V by 3) on faces F (#F by 3), in parallel.
+//! \throw InvalidInput for differing row counts, a face index out of range, or a non-finite coordinate.
+RigidityError rigidity_error(const Positions& rest, const Positions& deformed, const Faces& F,
+                             const RigidityOptions& options = {});
+
+// ---------------------------------------------------------------------------------------------------
+// Detail distortion
+
+//! Change of the details, measured as seed 9.3 defines them: B0 = fair_region(S), B1 = fair_region(S')
+//! (each faired with the operator of its own geometry), h0 and h1 the normal-displacement heights of S
+//! over B0 and of S' over B1 (NormalDisplacements); the distortion of vertex i is |h1_i − h0_i|.
+struct DetailDistortion {
+  //! #V values |h1 − h0| in scene units on free vertices; 0 on fixed and handle vertices (they are not
+  //! faired, so both heights are 0 there).
+  Eigen::VectorXd per_vertex;
+  //! The normaliser of `stats`: max |h0| over the free vertices, or, for a surface without details
+  //! there (max |h0| ≤ 1e-12 · bounding-box diagonal), the bounding-box diagonal of S.
+  double scale = 0;
+  //! Statistics of per_vertex / scale over the free vertices: details scaled by a factor s everywhere
+  //! read max ≈ |s − 1|; an unchanged or rigidly moved surface reads 0.
+  Stats stats;
+  Eigen::VectorXd rest_heights;      //!< #V h0
+  Eigen::VectorXd deformed_heights;  //!< #V h1
+  //! Vertices whose base-point search fell back to the closest point (NormalDisplacements::report) in
+  //! either encoding; their heights are less reliable.
+  int fallback_vertices = 0;
+};
+
+//! Detail distortion of deformed (S') against rest (S), both #V by 3 with faces F; region as for the
+//! edit (its free vertices are faired). \throw InvalidInput for differing sizes or a region without free
+//! vertices; otherwise as fair_region() and NormalDisplacements::encode().
+DetailDistortion detail_distortion(const Positions& rest, const Positions& deformed, const Faces& F,
+                                   const Region& region, const FairingOptions& fairing = {});
+
+// ---------------------------------------------------------------------------------------------------
+// Volume
+
+//! True if (P, F) is closed and consistently oriented: every directed edge (a, b) of a face is matched
+//! by exactly as many uses of (b, a). Meshes with boundaries, or with flipped faces, are not closed.
+//! \throw InvalidInput for a face index out of range.
+bool is_closed(const Faces& F, int num_vertices);
+
+//! Signed enclosed volume Σ_f p0 · (p1 × p2) / 6 (divergence theorem) of a closed mesh: positive for
+//! outward-oriented faces. std::nullopt if the mesh is not closed (is_closed).
+//! \throw InvalidInput for a face index out of range or a non-finite coordinate.
+std::optional<double> volume(const Positions& P, const Faces& F);
+
+//! Relative volume change V(deformed)/V(rest) − 1 (a uniform scaling by s gives s³ − 1). std::nullopt
+//! when the mesh is not closed or the rest volume is 0. \throw InvalidInput for differing row counts and
+//! as volume().
+std::optional<double> volume_change(const Positions& rest, const Positions& deformed, const Faces& F);
+
+// ---------------------------------------------------------------------------------------------------
+// Distance to a reference result
+
+struct ReferenceDistance {
+  double max = 0;       //!< max_i |p_i − q_i| / diagonal
+  double mean = 0;      //!< mean_i |p_i − q_i| / diagonal
+  double diagonal = 0;  //!< bounding-box diagonal of the reference (the normaliser)
+};
+
+//! Vertex-to-vertex distance of P (#V by 3, faces F) to a reference result (Q, FQ) of the same mesh,
+//! relative to the reference's bounding-box diagonal.
+//! \throw InvalidInput if the vertex counts or the faces differ (naming the first differing face), if the
+//! reference's diagonal is 0, or a coordinate is non-finite.
+ReferenceDistance distance_to_reference(const Positions& P, const Faces& F, const Positions& Q,
+                                        const Faces& FQ);
+
+}  // namespace msd

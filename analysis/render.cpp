@@ -1,0 +1,504 @@
+#include "analysis/render.h"
+
+#include <embree3/rtcore.h>
+#include <stb/stb_image_write.h>  // declarations only: libstb holds the implementation
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+#include <tuple>
+
+#include "core/atomic_file.h"
+#include "core/errors.h"
+#include "core/mesh.h"
+#include "core/parallel.h"
+#include "decomposition/laplace.h"
+
+namespace msd {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kGamma = 2.2;
+const Vec3 kTextColour(0.12, 0.13, 0.16);
+
+std::uint8_t to_byte(double c) {
+  return static_cast<std::uint8_t>(std::lround(std::clamp(c, 0.0, 1.0) * 255.0));
+}
+
+// Lighting is computed on linear intensities and encoded back with a plain 2.2 gamma, so shading falls
+// off as on a screen-referred photograph and supersampled edges average correctly.
+Vec3 to_linear(const Vec3& c) {
+  return Vec3(std::pow(std::clamp(c.x(), 0.0, 1.0), kGamma), std::pow(std::clamp(c.y(), 0.0, 1.0), kGamma),
+              std::pow(std::clamp(c.z(), 0.0, 1.0), kGamma));
+}
+Vec3 to_display(const Vec3& c) {
+  return Vec3(std::pow(std::clamp(c.x(), 0.0, 1.0), 1 / kGamma),
+              std::pow(std::clamp(c.y(), 0.0, 1.0), 1 / kGamma),
+              std::pow(std::clamp(c.z(), 0.0, 1.0), 1 / kGamma));
+}
+
+Vec3 background(const RenderOptions& o, int row, int height) {
+  const double t = height > 1 ? static_cast<double>(row) / (height - 1) : 0.0;
+  return (1 - t) * o.background_top + t * o.background_bottom;
+}
+
+std::string format_number(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", x);
+  return buffer;
+}
+
+// Owns an Embree device and a committed scene of one triangle geometry.
+class EmbreeScene {
+ public:
+  // P: #V by 3 in the render frame (already centred), F: #F by 3 with valid indices.
+  EmbreeScene(const Positions& P, const Faces& F) {
+    device_ = rtcNewDevice(nullptr);
+    if (!device_)
+      throw Error("render: Embree could not create a device (error " +
+                  std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) + ")");
+    scene_ = rtcNewScene(device_);
+    RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), P.rows()));
+    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), F.rows()));
+    if (!vertices || !indices) {
+      rtcReleaseGeometry(geometry);
+      fail("could not allocate buffers");
+    }
+    for (Eigen::Index v = 0; v < P.rows(); ++v)
+      for (int k = 0; k < 3; ++k) vertices[3 * v + k] = static_cast<float>(P(v, k));
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) indices[3 * f + k] = static_cast<unsigned>(F(f, k));
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(scene_, geometry);
+    rtcReleaseGeometry(geometry);
+    rtcCommitScene(scene_);
+    if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) fail("could not build the scene");
+  }
+  ~EmbreeScene() {
+    if (scene_) rtcReleaseScene(scene_);
+    if (device_) rtcReleaseDevice(device_);
+  }
+  EmbreeScene(const EmbreeScene&) = delete;
+  EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+  // Closest hit along org + t dir, t > 0: face index (or -1), barycentrics of corners 1 and 2, and t.
+  int intersect(const Vec3& org, const Vec3& dir, float& u, float& v) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh;
+    set_ray(rh.ray, org, dir);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return -1;
+    u = rh.hit.u;
+    v = rh.hit.v;
+    return static_cast<int>(rh.hit.primID);
+  }
+
+  bool occluded(const Vec3& org, const Vec3& dir) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay ray;
+    set_ray(ray, org, dir);
+    rtcOccluded1(scene_, &context, &ray);
+    return ray.tfar < 0;  // Embree sets tfar to -inf on a hit
+  }
+
+ private:
+  static void set_ray(RTCRay& ray, const Vec3& org, const Vec3& dir) {
+    ray.org_x = static_cast<float>(org.x());
+    ray.org_y = static_cast<float>(org.y());
+    ray.org_z = static_cast<float>(org.z());
+    ray.dir_x = static_cast<float>(dir.x());
+    ray.dir_y = static_cast<float>(dir.y());
+    ray.dir_z = static_cast<float>(dir.z());
+    ray.tnear = 0.0f;
+    ray.tfar = std::numeric_limits<float>::infinity();
+    ray.time = 0.0f;
+    ray.mask = ~0u;
+    ray.id = 0;
+    ray.flags = 0;
+  }
+  [[noreturn]] void fail(const char* what) const {
+    throw Error(std::string("render: Embree ") + what + " (error " +
+                std::to_string(static_cast<int>(rtcGetDeviceError(device_))) + ")");
+  }
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+};
+
+// A pinhole camera in the centred frame of the mesh.
+struct Camera {
+  Vec3 eye, forward, right, up;
+  double tan_h = 0, tan_v = 0;  // half-extents of the image plane at unit distance
+
+  Vec3 ray(double ndc_x, double ndc_y) const {
+    return (forward + ndc_x * tan_h * right + ndc_y * tan_v * up).normalized();
+  }
+};
+
+// Camera for the centred positions Pc (bounding-box centre at the origin, farthest vertex at radius).
+Camera frame_camera(const Positions& Pc, double radius, const Vec3& centre, const RenderOptions& o,
+                    int view_width) {
+  Camera cam;
+  const Vec3 to_eye = o.view_direction.normalized();
+  Vec3 up = o.up.norm() > 0 ? o.up.normalized() : Vec3(0, 0, 1);
+  if (up.cross(to_eye).norm() < 1e-6) {
+    Eigen::Index axis;
+    to_eye.cwiseAbs().minCoeff(&axis);
+    up = Vec3::Unit(axis);
+  }
+  cam.forward = -to_eye;
+  cam.right = cam.forward.cross(up).normalized();
+  cam.up = cam.right.cross(cam.forward);
+  cam.tan_v = std::tan(0.5 * o.fov_degrees * kPi / 180.0);
+  cam.tan_h = cam.tan_v * view_width / o.height;
+
+  if (o.framing == Framing::BoundingSphere) {
+    // A sphere at distance d subtends a half-angle asin(r / d): fit it to the narrower field.
+    const bool given = o.sphere_radius > 0;
+    const Vec3 target = given ? Vec3(o.sphere_center - centre) : Vec3::Zero();
+    const double r = given ? o.sphere_radius : radius;
+    const double half_angle = std::atan(std::min(cam.tan_v, cam.tan_h));
+    cam.eye = target + to_eye * (1.04 * r / std::sin(half_angle));
+    return cam;
+  }
+
+  // Tight: with the eye at s_x right + s_y up − D forward, vertex (x, y, z) in camera axes lies inside
+  // the frame iff |x − s_x| ≤ fit tan_h (D + z) and |y − s_y| ≤ fit tan_v (D + z). For a given aim the
+  // smallest such D is explicit; the aim is refined a few times to centre the extreme vertices.
+  constexpr double fit = 0.95;
+  const Eigen::VectorXd x = Pc * cam.right, y = Pc * cam.up, z = Pc * cam.forward;
+  const double near = -z.minCoeff() + 1e-3 * radius;  // every vertex in front of the eye
+  double sx = 0, sy = 0, D = 0;
+  auto distance = [&] {
+    double d = near;
+    for (Eigen::Index i = 0; i < x.size(); ++i)
+      d = std::max(
+          d,
+          std::max(std::abs(x[i] - sx) / (fit * cam.tan_h), std::abs(y[i] - sy) / (fit * cam.tan_v)) - z[i]);
+    return d;
+  };
+  // Shift s that balances the extreme projections: (a − s)/da + (b − s)/db = 0 for the vertices with the
+  // largest and smallest projected coordinate (offsets a, b from the current aim, depths da, db).
+  auto centring_shift = [&](const Eigen::VectorXd& c, double aim) {
+    Eigen::Index lo = 0, hi = 0;
+    double plo = 1e300, phi = -1e300;
+    for (Eigen::Index i = 0; i < c.size(); ++i) {
+      const double p = (c[i] - aim) / (D + z[i]);
+      if (p < plo) {
+        plo = p;
+        lo = i;
+      }
+      if (p > phi) {
+        phi = p;
+        hi = i;
+      }
+    }
+    const double da = D + z[hi], db = D + z[lo];
+    return ((c[hi] - aim) / da + (c[lo] - aim) / db) / (1 / da + 1 / db);
+  };
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    D = distance();
+    const double dx = centring_shift(x, sx), dy = centring_shift(y, sy);
+    sx += dx;
+    sy += dy;
+  }
+  D = distance();
+  cam.eye = sx * cam.right + sy * cam.up - D * cam.forward;
+  return cam;
+}
+
+void check_options(const RenderOptions& o, const Positions& P) {
+  auto fail = [](const std::string& what) { throw InvalidInput("render: " + what); };
+  if (o.width < 1 || o.width > 16384 || o.height < 1 || o.height > 16384)
+    fail("image size " + std::to_string(o.width) + "x" + std::to_string(o.height) + " is outside 1..16384");
+  if (o.samples_per_axis < 1 || o.samples_per_axis > 16)
+    fail("samples_per_axis = " + std::to_string(o.samples_per_axis) + " is outside 1..16");
+  if (!(o.fov_degrees > 0 && o.fov_degrees < 170))
+    fail("fov_degrees = " + std::to_string(o.fov_degrees) + " is outside (0, 170)");
+  if (!o.view_direction.allFinite() || !(o.view_direction.norm() > 0))
+    fail("view_direction must be finite and non-zero");
+  if (!o.up.allFinite()) fail("up must be finite");
+  if (!o.sphere_center.allFinite() || !std::isfinite(o.sphere_radius) || o.sphere_radius < 0)
+    fail("sphere_center must be finite and sphere_radius finite and non-negative");
+  if (o.vertex_scalar) {
+    const Eigen::VectorXd& s = *o.vertex_scalar;
+    if (s.size() != P.rows())
+      fail("vertex_scalar has " + std::to_string(s.size()) + " values for " + std::to_string(P.rows()) +
+           " vertices");
+    for (Eigen::Index i = 0; i < s.size(); ++i)
+      if (!std::isfinite(s[i])) fail("vertex_scalar is not finite at vertex " + std::to_string(i));
+    if (!std::isfinite(o.scalar_min) || !std::isfinite(o.scalar_max))
+      fail("scalar_min / scalar_max must be finite");
+  }
+}
+
+// Colour bar at the right of the image: sized from its texts, drawn after tracing.
+struct Legend {
+  bool shown = false;
+  int scale = 1, panel_width = 0;
+  double lo = 0, hi = 1;
+  std::string label;
+
+  int margin() const { return 8 * scale; }
+  int bar_width() const { return 9 * scale; }
+  std::string number(double t) const { return format_number(lo + t * (hi - lo)); }
+
+  void layout(const RenderOptions& o) {
+    scale = o.height >= 400 ? 2 : 1;
+    int numbers = 0;
+    for (double t : {0.0, 0.5, 1.0}) numbers = std::max(numbers, text_width(number(t), scale));
+    panel_width = margin() + bar_width() + 5 * scale + numbers + margin();
+    panel_width = std::max(panel_width, text_width(label, scale) + 2 * margin());
+    panel_width = std::min(panel_width, o.width / 3);
+  }
+
+  void draw(Image& image) const {
+    const int x0 = image.width - panel_width + margin();
+    const int bar_height = image.height * 3 / 5;
+    const int top = (image.height - bar_height) / 2 + text_height(scale);
+    const int text_gap = 5 * scale;
+    // Title above the bar, right-aligned so a long label grows into the picture rather than off the edge.
+    const int label_x = std::min(x0, image.width - margin() - text_width(label, scale));
+    draw_text(image, label_x, top - 3 * text_height(scale), label, kTextColour, scale);
+    for (int y = 0; y < bar_height; ++y) {
+      const Vec3 c = viridis(1.0 - static_cast<double>(y) / std::max(bar_height - 1, 1));
+      for (int x = 0; x < bar_width(); ++x) image.set(x0 + x, top + y, c);
+    }
+    for (int x = -1; x <= bar_width(); ++x) {
+      image.set(x0 + x, top - 1, kTextColour);
+      image.set(x0 + x, top + bar_height, kTextColour);
+    }
+    for (int y = -1; y <= bar_height; ++y) {
+      image.set(x0 - 1, top + y, kTextColour);
+      image.set(x0 + bar_width(), top + y, kTextColour);
+    }
+    // Numbers beside the bar at its ends and middle; no tick marks, which would read as minus signs.
+    for (double t : {0.0, 0.5, 1.0}) {
+      const int y = top + static_cast<int>(std::lround((1.0 - t) * (bar_height - 1)));
+      draw_text(image, x0 + bar_width() + text_gap, y - text_height(scale) / 2, number(t), kTextColour,
+                scale);
+    }
+  }
+};
+
+double percentile(std::vector<double>& sorted, double q) {
+  const size_t rank = static_cast<size_t>(std::ceil(q * static_cast<double>(sorted.size())));
+  return sorted[std::clamp<size_t>(rank, 1, sorted.size()) - 1];
+}
+
+}  // namespace
+
+Image::Image(int w, int h, const Vec3& fill) : width(w), height(h), rgb(3 * static_cast<size_t>(w) * h) {
+  const std::uint8_t c[3] = {to_byte(fill.x()), to_byte(fill.y()), to_byte(fill.z())};
+  for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = c[i % 3];
+}
+
+void Image::set(int x, int y, const Vec3& colour) {
+  if (x < 0 || y < 0 || x >= width || y >= height) return;
+  std::uint8_t* p = pixel(x, y);
+  p[0] = to_byte(colour.x());
+  p[1] = to_byte(colour.y());
+  p[2] = to_byte(colour.z());
+}
+
+Vec3 viridis(double t) {
+  // matplotlib's viridis sampled at t = 0, 1/8, ..., 1.
+  static const double samples[9][3] = {
+      {0.267004, 0.004874, 0.329415}, {0.282623, 0.140926, 0.457517}, {0.229739, 0.322361, 0.545706},
+      {0.172719, 0.448791, 0.557885}, {0.127568, 0.566949, 0.550556}, {0.134692, 0.658636, 0.517649},
+      {0.266941, 0.748751, 0.440573}, {0.477504, 0.821444, 0.318195}, {0.993248, 0.906157, 0.143936}};
+  if (!(t > 0)) t = 0;  // also maps NaN to the low end
+  t = std::min(t, 1.0) * 8.0;
+  const int k = std::min(static_cast<int>(t), 7);
+  const double f = t - k;
+  Vec3 c;
+  for (int i = 0; i < 3; ++i) c[i] = (1 - f) * samples[k][i] + f * samples[k + 1][i];
+  return c;
+}
+
+std::pair<double, double> robust_scalar_range(const Eigen::VectorXd& values) {
+  if (values.size() == 0) throw InvalidInput("robust_scalar_range: no values");
+  std::vector<double> v(values.data(), values.data() + values.size());
+  for (size_t i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v[i]))
+      throw InvalidInput("robust_scalar_range: value " + std::to_string(i) + " is not finite");
+  std::sort(v.begin(), v.end());
+  double lo = v.front() >= 0 ? 0.0 : percentile(v, 0.01);
+  double hi = percentile(v, 0.99);
+  if (!(hi > lo)) hi = v.back();
+  if (!(hi > lo)) hi = lo + std::max(std::abs(lo), 1.0);
+  return {lo, hi};
+}
+
+Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
+  check_mesh_arrays(P, F, "render");
+  if (F.rows() == 0) throw InvalidInput("render: the mesh has no faces");
+  check_options(o, P);
+
+  // Everything is traced relative to the bounding-box centre, which keeps Embree's floats accurate for
+  // meshes far from the origin.
+  const Vec3 lo = P.colwise().minCoeff().transpose(), hi = P.colwise().maxCoeff().transpose();
+  const Vec3 centre = 0.5 * (lo + hi);
+  const Positions Pc = P.rowwise() - centre.transpose();
+  double radius = Pc.rowwise().norm().maxCoeff();
+  if (!(radius > 0)) radius = 1;
+  const Positions N = vertex_normals(P, F);
+  const EmbreeScene scene(Pc, F);
+
+  Legend legend;
+  if (o.vertex_scalar) {
+    legend.lo = o.scalar_min;
+    legend.hi = o.scalar_max;
+    if (legend.lo == legend.hi) std::tie(legend.lo, legend.hi) = robust_scalar_range(*o.vertex_scalar);
+    legend.shown = o.legend && o.width >= 100 && o.height >= 60;
+    legend.label = o.scalar_label;
+    if (legend.shown) legend.layout(o);
+  }
+  const int view_width = o.width - (legend.shown ? legend.panel_width : 0);
+
+  const Camera cam = frame_camera(Pc, radius, centre, o, view_width);
+
+  // Head light from the eye, key light from the upper left (in camera terms, so every view is lit alike).
+  const Vec3 key = (-0.6 * cam.right + 0.7 * cam.up - 0.4 * cam.forward).normalized();
+  constexpr double ambient = 0.12, head_strength = 0.42, key_strength = 0.62, specular_strength = 0.12;
+  const double shadow_offset = 1e-4 * radius;
+  const Vec3 base = to_linear(o.base_color);
+  const Eigen::VectorXd* scalar = o.vertex_scalar;
+
+  auto shade = [&](int f, double u, double v, const Vec3& dir) -> Vec3 {
+    const int a = F(f, 0), b = F(f, 1), c = F(f, 2);
+    const double w0 = 1 - u - v;
+    const Vec3 pa = Pc.row(a).transpose(), pb = Pc.row(b).transpose(), pc = Pc.row(c).transpose();
+    Vec3 ng = (pb - pa).cross(pc - pa);
+    ng = ng.norm() > 0 ? ng.normalized() : Vec3(-dir);
+    const Vec3 view = -dir;
+    if (ng.dot(view) < 0) ng = -ng;  // two-sided: the face turned towards the viewer
+    Vec3 n = (w0 * N.row(a) + u * N.row(b) + v * N.row(c)).transpose();
+    n = n.norm() > 1e-12 ? n.normalized() : ng;
+    if (n.dot(ng) < 0) n = -n;
+
+    Vec3 albedo = base;
+    if (scalar) {
+      const double s = w0 * (*scalar)[a] + u * (*scalar)[b] + v * (*scalar)[c];
+      albedo = to_linear(viridis((s - legend.lo) / (legend.hi - legend.lo)));
+    }
+    double lit = ambient + head_strength * std::abs(n.dot(view));
+    const double n_dot_key = n.dot(key);
+    if (n_dot_key > 0 && ng.dot(key) > 0) {
+      bool visible = true;
+      if (o.shadows) {
+        const Vec3 point = w0 * pa + u * pb + v * pc + shadow_offset * ng;
+        visible = !scene.occluded(point, key);
+      }
+      if (visible) {
+        lit += key_strength * n_dot_key;
+        const double spec = std::pow(std::max(0.0, n.dot((key + view).normalized())), 40.0);
+        return lit * albedo + Vec3::Constant(specular_strength * spec);
+      }
+    }
+    return lit * albedo;
+  };
+
+  Image image(o.width, o.height);
+  for (int y = 0; y < o.height; ++y) {
+    const Vec3 bg = background(o, y, o.height);
+    for (int x = 0; x < o.width; ++x) image.set(x, y, bg);
+  }
+  const int s = o.samples_per_axis;
+  parallel_for_chunks(
+      o.height,
+      [&](long row_begin, long row_end) {
+        for (long yl = row_begin; yl < row_end; ++yl) {
+          const int y = static_cast<int>(yl);
+          const Vec3 bg = to_linear(background(o, y, o.height));
+          for (int x = 0; x < view_width; ++x) {
+            Vec3 sum = Vec3::Zero();
+            int hits = 0;
+            for (int sy = 0; sy < s; ++sy)
+              for (int sx = 0; sx < s; ++sx) {
+                const double px = x + (sx + 0.5) / s, py = y + (sy + 0.5) / s;
+                const double ndc_x = 2.0 * px / view_width - 1.0, ndc_y = 1.0 - 2.0 * py / o.height;
+                const Vec3 dir = cam.ray(ndc_x, ndc_y);
+                float u = 0, v = 0;
+                const int f = scene.intersect(cam.eye, dir, u, v);
+                if (f < 0) {
+                  sum += bg;
+                } else {
+                  sum += shade(f, u, v, dir);
+                  ++hits;
+                }
+              }
+            if (hits > 0) image.set(x, y, to_display(sum / (s * s)));
+          }
+        }
+      },
+      4);
+  if (legend.shown) legend.draw(image);
+  return image;
+}
+
+void render_png(const Positions& P, const Faces& F, const std::string& path, const RenderOptions& options) {
+  write_png(render(P, F, options), path);
+}
+
+void write_png(const Image& image, const std::string& path) {
+  if (image.width < 1 || image.height < 1)
+    throw InvalidInput("write_png: the image for " + path + " is empty");
+  if (image.rgb.size() != 3 * static_cast<size_t>(image.width) * image.height)
+    throw InvalidInput("write_png: the image for " + path + " holds " + std::to_string(image.rgb.size()) +
+                       " bytes, not 3 x " + std::to_string(image.width) + " x " +
+                       std::to_string(image.height));
+  std::string png;
+  auto append = [](void* context, void* data, int size) {
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data), static_cast<size_t>(size));
+  };
+  if (!stbi_write_png_to_func(append, &png, image.width, image.height, 3, image.rgb.data(), 3 * image.width))
+    throw Error("write_png: PNG encoding failed for " + path);
+  write_file_atomically(path, png);
+}
+
+Image tile_images(const std::vector<Image>& tiles, int columns, const std::vector<std::string>& labels) {
+  if (tiles.empty()) throw InvalidInput("tile_images: no tiles");
+  if (columns < 1)
+    throw InvalidInput("tile_images: columns = " + std::to_string(columns) + " must be at least 1");
+  if (!labels.empty() && labels.size() != tiles.size())
+    throw InvalidInput("tile_images: " + std::to_string(labels.size()) + " labels for " +
+                       std::to_string(tiles.size()) + " tiles (give one per tile or none)");
+  int cell_w = 0, cell_h = 0;
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    const Image& t = tiles[i];
+    if (t.width < 1 || t.height < 1 || t.rgb.size() != 3 * static_cast<size_t>(t.width) * t.height)
+      throw InvalidInput("tile_images: tile " + std::to_string(i) +
+                         " is empty or has a buffer of the wrong size");
+    cell_w = std::max(cell_w, t.width);
+    cell_h = std::max(cell_h, t.height);
+  }
+  const int scale = cell_w >= 400 ? 2 : 1;
+  const int gap = 4 * scale;
+  const int label_h = labels.empty() ? 0 : text_height(scale) + 2 * gap;
+  columns = std::min<int>(columns, static_cast<int>(tiles.size()));
+  const int rows = (static_cast<int>(tiles.size()) + columns - 1) / columns;
+  Image sheet(gap + columns * (cell_w + gap), gap + rows * (cell_h + label_h + gap), Vec3(1, 1, 1));
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    const Image& t = tiles[i];
+    const int col = static_cast<int>(i) % columns, row = static_cast<int>(i) / columns;
+    const int cell_x = gap + col * (cell_w + gap), cell_y = gap + row * (cell_h + label_h + gap);
+    const int x0 = cell_x + (cell_w - t.width) / 2, y0 = cell_y + (cell_h - t.height) / 2;
+    for (int y = 0; y < t.height; ++y)
+      std::copy(t.pixel(0, y), t.pixel(0, y) + 3 * t.width, sheet.pixel(x0, y0 + y));
+    if (!labels.empty())
+      draw_text(sheet, cell_x + (cell_w - text_width(labels[i], scale)) / 2, cell_y + cell_h + gap, labels[i],
+                kTextColour, scale);
+  }
+  return sheet;
+}
+
+}  // namespace msd

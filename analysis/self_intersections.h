@@ -1,0 +1,29 @@
+#pragma once
+//! \file Self-intersecting face pairs of a triangle mesh (CGAL Polygon Mesh Processing). This header is
+//! CGAL-free; self_intersections.cpp is the only translation unit of msdeform that includes CGAL.
+
+#include <utility>
+#include <vector>
+
+#include "core/types.h"
+
+namespace msd {
+
+//! Number of pairs of distinct faces of (P #V×3, F #F×3) that intersect other than along what they
+//! share: faces with a common edge intersect only if they overlap beyond it, faces with a common vertex
+//! only if they meet elsewhere. Exact predicates (CGAL Epick), so touching counts as intersecting.
+//! Runs CGAL::Polygon_mesh_processing::self_intersections, in parallel with TBB.
+//!
+//! Degenerate faces are not tested against others (CGAL creates no bounding box for them, so an
+//! intersection that involves one goes unreported): a face with collinear corners, or one that repeats
+//! a vertex index, is counted in *degenerate_faces instead and never appears in pairs.
+//!
+//! pairs, if given, receives the intersecting faces as (f, g) rows of F with f < g, sorted.
+//! \throw InvalidInput for a face index out of range, a non-finite coordinate, or a face that cannot be
+//! added to a manifold, consistently oriented surface (named by its row; the msd::Mesh loaders already
+//! guarantee this for their meshes).
+int count_self_intersections(const Positions& P, const Faces& F,
+                             std::vector<std::pair<int, int>>* pairs = nullptr,
+                             int* degenerate_faces = nullptr);
+
+}  // namespace msd

@@ -1,0 +1,220 @@
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+
+#include "analysis/comparison.h"
+#include "analysis/render.h"
+#include "apps/msdeform/commands.h"
+#include "apps/msdeform/deformers.h"
+#include "apps/msdeform/edit_case.h"
+#include "core/atomic_file.h"
+#include "core/errors.h"
+#include "core/mesh_io.h"
+#include "core/scenes.h"
+
+namespace msd::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> default_scenes() {
+  return {"lift", "bend120", "twist135", "bar-lift", "bar-bend120", "bar-twist135"};
+}
+
+std::string html_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) out += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
+  return out;
+}
+
+// One sphere around the rest shape and every result of a scene, so all its pictures share one camera.
+void framing_sphere(const Positions& rest, const std::vector<MethodResult>& results, Vec3& center, double& radius) {
+  Vec3 lo = rest.colwise().minCoeff(), hi = rest.colwise().maxCoeff();
+  for (const auto& r : results)
+    if (r.ok) lo = lo.cwiseMin(r.result.colwise().minCoeff().transpose()), hi = hi.cwiseMax(r.result.colwise().maxCoeff().transpose());
+  center = 0.5 * (lo + hi);
+  radius = 0.5 * (hi - lo).norm();
+}
+
+struct SceneOutput {
+  std::string name;
+  std::vector<std::string> images;  // input first, then one per method
+};
+
+std::string index_html(const std::vector<MethodResult>& results, const std::vector<SceneOutput>& scenes,
+                       const std::vector<std::string>& methods) {
+  std::ostringstream h;
+  h << "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>msdeform comparison</title>\n"
+       "<style>body{font-family:sans-serif;margin:1.5em}table{border-collapse:collapse;font-size:13px}"
+       "td,th{border:1px solid #bbb;padding:3px 6px;text-align:right}th{background:#eee}"
+       "td:nth-child(-n+2){text-align:left}img{width:320px;border:1px solid #ccc}"
+       ".grid td{text-align:center;vertical-align:top;font-size:12px}</style></head><body>\n"
+       "<h1>msdeform: methods and detail encodings compared</h1>\n"
+       "<p>Colour: change of the detail heights (normal displacements over a faired base, seed 9.3) against "
+       "the input; one camera per scene. Files: <a href=\"metrics.csv\">metrics.csv</a>, "
+       "<a href=\"metrics.md\">metrics.md</a>, <a href=\"contact_sheet.png\">contact_sheet.png</a>, meshes/.</p>\n";
+  h << "<h2>Pictures</h2>\n<table class=\"grid\"><tr><th></th>";
+  for (const auto& s : scenes) h << "<th>" << html_escape(s.name) << "</th>";
+  h << "</tr>\n";
+  std::vector<std::string> rows = {"input"};
+  rows.insert(rows.end(), methods.begin(), methods.end());
+  for (size_t r = 0; r < rows.size(); ++r) {
+    h << "<tr><th>" << html_escape(rows[r]) << "</th>";
+    for (const auto& s : scenes) h << "<td><img src=\"" << html_escape(s.images[r]) << "\" alt=\"\"></td>";
+    h << "</tr>\n";
+  }
+  h << "</table>\n<h2>Metrics</h2>\n<table><tr>";
+  std::istringstream csv(metrics_csv(results));
+  std::string line;
+  bool header = true;
+  while (std::getline(csv, line)) {
+    if (!header) h << "<tr>";
+    // The table's own CSV: cells hold no commas except in the quoted error column (last).
+    std::string cell;
+    std::istringstream cells(line);
+    int k = 0;
+    while (std::getline(cells, cell, ',') && k < 15) {
+      h << (header ? "<th>" : "<td>") << html_escape(cell) << (header ? "</th>" : "</td>");
+      ++k;
+    }
+    h << "</tr>\n";
+    header = false;
+  }
+  h << "</table>\n<p>rigidity: one-ring rotation residual (0 = locally rigid); distortion: |Δh| / max detail "
+       "height; self_intersections: intersecting face pairs (CGAL).</p>\n</body></html>\n";
+  return h.str();
+}
+
+}  // namespace
+
+void add_compare_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "compare",
+      "Run every method and detail encoding on the benchmark edits; write metrics, meshes, pictures and index.html");
+  struct Args {
+    std::vector<std::string> methods, scenes;
+    std::string resolution = "10k", output = "compare-out", mesh, sel, def;
+    bool no_self_intersections = false;
+    DeformerOptions method;
+  };
+  auto a = std::make_shared<Args>();
+  cmd->add_option("--methods", a->methods, "Methods to run (default: all): " + [] {
+    std::string s;
+    for (const auto& n : method_names()) s += (s.empty() ? "" : ",") + n;
+    return s;
+  }())->delimiter(',');
+  cmd->add_option("--scenes", a->scenes, "Built-in scenes (default: lift,bend120,twist135,bar-lift,bar-bend120,bar-twist135; "
+                                         "none when --mesh is given)")
+      ->delimiter(',');
+  cmd->add_option("--resolution", a->resolution, "Approximate vertex count of the built-in scenes")->capture_default_str();
+  cmd->add_option("--mesh", a->mesh, "Also run a mesh file of your own (needs --sel and --def), e.g. CGAL's cactus");
+  cmd->add_option("--sel", a->sel, "Region of --mesh (.sel or .dmat)");
+  cmd->add_option("--def", a->def, "Handle transforms of --mesh (.def)");
+  cmd->add_option("-o,--output", a->output, "Output folder (created; finished files are replaced atomically)")
+      ->capture_default_str();
+  cmd->add_flag("--no-self-intersections", a->no_self_intersections, "Skip the CGAL self-intersection count");
+  auto* shell = cmd->add_option_group("shell", "operator options shared by shell and multiscale-*");
+  shell->add_option("--ks", a->method.options.shell.ks, "stretching stiffness")->capture_default_str();
+  shell->add_option("--kb", a->method.options.shell.kb, "bending stiffness")->capture_default_str();
+  cmd->callback([a] {
+    const auto start = std::chrono::steady_clock::now();
+    ComparisonOptions options;
+    if (!a->methods.empty()) options.methods = a->methods;
+    options.method_options = a->method.options;
+    options.self_intersections = !a->no_self_intersections;
+    options.progress = [](const std::string& line) { std::fprintf(stderr, "  %s\n", line.c_str()); };
+    check_method_names(options.methods);  // fail fast, before any work
+    // Build every case first, so a bad name or file fails before anything is written.
+    std::vector<std::string> scenes = a->scenes;
+    if (scenes.empty() && a->mesh.empty()) scenes = default_scenes();
+    const int resolution = parse_resolution(a->resolution);
+    std::vector<EditCase> cases;
+    for (const auto& s : scenes) {
+      std::fprintf(stderr, "building scene %s (%s vertices)\n", s.c_str(), a->resolution.c_str());
+      cases.push_back(scene_case(s, resolution));
+    }
+    if (!a->mesh.empty()) {
+      if (a->sel.empty() || a->def.empty()) throw InvalidInput("compare: --mesh needs --sel and --def");
+      cases.push_back(file_case(a->mesh, a->sel, a->def));
+    }
+    const fs::path out(a->output);
+    std::error_code ec;
+    for (const char* sub : {"images", "meshes"}) fs::create_directories(out / sub, ec);
+    if (ec) throw InvalidInput("compare: cannot create " + (out / "images").string() + ": " + ec.message());
+
+    std::vector<MethodResult> all;
+    std::vector<SceneOutput> scene_outputs;
+    std::vector<Image> tiles;
+    std::vector<std::string> tile_labels;
+    std::vector<std::vector<Image>> tiles_by_scene;
+    for (const auto& c : cases) {
+      std::fprintf(stderr, "%s: %zu vertices, %zu methods\n", c.name.c_str(), c.mesh.n_vertices(), options.methods.size());
+      std::vector<MethodResult> results = compare_methods(c, options);
+      const Positions rest = positions(c.mesh);
+      const Faces F = faces(c.mesh);
+      RenderOptions view;
+      view.width = 640;
+      view.height = 480;
+      view.framing = Framing::BoundingSphere;
+      framing_sphere(rest, results, view.sphere_center, view.sphere_radius);
+      double scalar_max = 0;
+      for (const auto& r : results)
+        if (r.ok) scalar_max = std::max(scalar_max, robust_scalar_range(r.distortion_per_vertex).second);
+      SceneOutput so{c.name, {}};
+      std::vector<Image> column;
+      const std::string input_png = "images/" + c.name + "--input.png";
+      Image input = render(rest, F, view);
+      write_png(input, (out / input_png).string());
+      so.images.push_back(input_png);
+      column.push_back(std::move(input));
+      for (const auto& r : results) {
+        const std::string png = "images/" + c.name + "--" + r.method + ".png";
+        if (r.ok) {
+          RenderOptions ro = view;
+          ro.vertex_scalar = &r.distortion_per_vertex;
+          ro.scalar_label = "detail change";
+          ro.scalar_min = 0;
+          ro.scalar_max = scalar_max > 0 ? scalar_max : 1e-12;
+          Image img = render(r.result, F, ro);
+          write_png(img, (out / png).string());
+          SaveOptions save;
+          save.vertex_scalar = &r.distortion_per_vertex;
+          save.scalar_name = "detail_change";
+          save_mesh(r.result, F, (out / "meshes" / (c.name + "--" + r.method + ".ply")).string(), save);
+          column.push_back(std::move(img));
+        } else {
+          Image failed(view.width, view.height, Vec3(0.9, 0.85, 0.85));
+          draw_text(failed, 20, view.height / 2, "failed: " + r.error.substr(0, 70), Vec3(0.5, 0, 0));
+          write_png(failed, (out / png).string());
+          column.push_back(std::move(failed));
+        }
+        so.images.push_back(png);
+      }
+      std::fprintf(stderr, "  rendered %zu pictures\n", column.size());
+      scene_outputs.push_back(so);
+      tiles_by_scene.push_back(std::move(column));
+      all.insert(all.end(), std::make_move_iterator(results.begin()), std::make_move_iterator(results.end()));
+    }
+    // Contact sheet like Fig. 9.16: one column per scene, one row per method (the input on top).
+    const size_t rows = options.methods.size() + 1;
+    for (size_t r = 0; r < rows; ++r)
+      for (size_t s = 0; s < scene_outputs.size(); ++s) {
+        tiles.push_back(std::move(tiles_by_scene[s][r]));
+        tile_labels.push_back(scene_outputs[s].name + " / " + (r == 0 ? std::string("input") : options.methods[r - 1]));
+      }
+    write_png(tile_images(tiles, static_cast<int>(scene_outputs.size()), tile_labels), (out / "contact_sheet.png").string());
+    write_file_atomically((out / "metrics.csv").string(), metrics_csv(all));
+    write_file_atomically((out / "metrics.md").string(), metrics_markdown(all));
+    write_file_atomically((out / "index.html").string(), index_html(all, scene_outputs, options.methods));
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    int failed = 0;
+    for (const auto& r : all) failed += !r.ok;
+    std::printf("%s", metrics_markdown(all).c_str());
+    std::printf("\nwrote %s/index.html (%zu results, %d failed) in %.1f s\n", a->output.c_str(), all.size(), failed, seconds);
+  });
+}
+
+}  // namespace msd::cli

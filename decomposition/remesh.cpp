@@ -1,0 +1,90 @@
+// The one translation unit of decomposition/ that includes CGAL (about 1 GB of compiler memory).
+
+#include "decomposition/remesh.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/border.h>
+#include <CGAL/Polygon_mesh_processing/remesh.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/errors.h"
+
+namespace msd {
+namespace {
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using SurfaceMesh = CGAL::Surface_mesh<Kernel::Point_3>;
+namespace PMP = CGAL::Polygon_mesh_processing;
+}  // namespace
+
+RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_edge_length, int iterations) {
+  const std::string who = "remesh_isotropic";
+  if (!(target_edge_length > 0) || !std::isfinite(target_edge_length))
+    throw InvalidInput(who + ": target edge length " + std::to_string(target_edge_length) +
+                       " must be finite and positive");
+  if (iterations < 0)
+    throw InvalidInput(who + ": iterations " + std::to_string(iterations) + " must be >= 0");
+  for (Eigen::Index v = 0; v < P.rows(); ++v)
+    if (!P.row(v).allFinite())
+      throw InvalidInput(who + ": vertex " + std::to_string(v) + " has a non-finite coordinate");
+
+  SurfaceMesh mesh;
+  mesh.reserve(static_cast<SurfaceMesh::size_type>(P.rows()),
+               static_cast<SurfaceMesh::size_type>(3 * F.rows()),
+               static_cast<SurfaceMesh::size_type>(F.rows()));
+  std::vector<SurfaceMesh::Vertex_index> vertex(P.rows());
+  for (Eigen::Index v = 0; v < P.rows(); ++v)
+    vertex[v] = mesh.add_vertex(Kernel::Point_3(P(v, 0), P(v, 1), P(v, 2)));
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const int a = F(f, 0), b = F(f, 1), c = F(f, 2);
+    for (int i : {a, b, c})
+      if (i < 0 || i >= P.rows())
+        throw InvalidInput(who + ": face " + std::to_string(f) + " has vertex index " + std::to_string(i) +
+                           " out of range [0, " + std::to_string(P.rows()) + ")");
+    if (a == b || b == c || c == a)
+      throw InvalidInput(who + ": face " + std::to_string(f) + " repeats a vertex");
+    if (mesh.add_face(vertex[a], vertex[b], vertex[c]) == SurfaceMesh::null_face())
+      throw InvalidInput(who + ": face " + std::to_string(f) + " (" + std::to_string(a) + ", " +
+                         std::to_string(b) + ", " + std::to_string(c) +
+                         ") makes the surface non-manifold or is oriented against a neighbour");
+  }
+
+  try {
+    // Border edges: split the long ones at collinear points (so that protecting them is allowed: CGAL
+    // requires protected edges of at most 4/3 the target), then constrain and protect them all.
+    std::vector<SurfaceMesh::Edge_index> border;
+    for (SurfaceMesh::Halfedge_index h : mesh.halfedges())
+      if (mesh.is_border(h)) border.push_back(mesh.edge(h));
+    PMP::split_long_edges(border, target_edge_length, mesh);
+    auto constrained = mesh.add_property_map<SurfaceMesh::Edge_index, bool>("e:msd_constrained", false).first;
+    for (SurfaceMesh::Edge_index e : mesh.edges())
+      if (mesh.is_border(e)) constrained[e] = true;
+    PMP::isotropic_remeshing(mesh.faces(), target_edge_length, mesh,
+                             CGAL::parameters::number_of_iterations(static_cast<unsigned>(iterations))
+                                 .edge_is_constrained_map(constrained)
+                                 .protect_constraints(true));
+    mesh.remove_property_map(constrained);
+  } catch (const CGAL::Failure_exception& e) {
+    throw SolverError(who + ": CGAL failed: " + e.what());
+  }
+  mesh.collect_garbage();
+
+  RemeshResult out;
+  out.P.resize(static_cast<Eigen::Index>(mesh.number_of_vertices()), 3);
+  for (SurfaceMesh::Vertex_index v : mesh.vertices()) {
+    const Kernel::Point_3& p = mesh.point(v);
+    out.P.row(static_cast<Eigen::Index>(v.idx())) << p.x(), p.y(), p.z();
+  }
+  out.F.resize(static_cast<Eigen::Index>(mesh.number_of_faces()), 3);
+  for (SurfaceMesh::Face_index f : mesh.faces()) {
+    int k = 0;
+    for (SurfaceMesh::Vertex_index v : CGAL::vertices_around_face(mesh.halfedge(f), mesh))
+      out.F(static_cast<Eigen::Index>(f.idx()), k++) = static_cast<int>(v.idx());
+  }
+  return out;
+}
+
+}  // namespace msd

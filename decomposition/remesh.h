@@ -1,0 +1,30 @@
+#pragma once
+//! \file Isotropic remeshing (Botsch & Kobbelt 2004, "A remeshing approach to multiresolution modeling";
+//! seed 9.3.2: a remeshed base surface makes the normal-displacement search and the base deformation
+//! numerically more robust). A thin wrapper over CGAL::Polygon_mesh_processing::isotropic_remeshing.
+
+#include "core/types.h"
+
+namespace msd {
+
+//! A remeshed surface: #V by 3 positions and #F by 3 faces (new connectivity, no relation to the input's
+//! vertex or face numbering).
+struct RemeshResult {
+  Positions P;
+  Faces F;
+};
+
+//! Remeshes (P #V×3, F #F×3) towards edges of length target_edge_length by `iterations` rounds of
+//! split (> 4/3 target), collapse (< 4/5 target), valence-improving flips and tangential relaxation, each
+//! round projecting the vertices back onto the input surface (CGAL isotropic_remeshing). The border is
+//! kept: border edges longer than the target are first split at collinear points
+//! (CGAL split_long_edges), then every border edge is constrained and protected, so the border vertices
+//! stay where they are and the outline of an open mesh is unchanged (border edges shorter than the target
+//! are kept as they are; the triangles next to them are smaller).
+//! \throw InvalidInput if target_edge_length is not finite and positive, iterations < 0, F indexes out of
+//! range or repeats a vertex in a face, a coordinate is not finite, or a face makes the surface
+//! non-manifold (the message names the face); SolverError if CGAL reports a failure.
+RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_edge_length,
+                              int iterations = 3);
+
+}  // namespace msd

@@ -1,0 +1,371 @@
+#include "detail/deformation_transfer.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+#include "core/errors.h"
+#include "core/parallel.h"
+
+namespace msd {
+namespace {
+
+// Same degeneracy test as cotan_laplacian(): twice the area at most 2e-14 times the longest edge squared.
+constexpr double kDegenerateAreaRatio = 1e-14;
+// Matches NormalDisplacements (see displacement_direction there).
+constexpr double kMinNormalLength = 1e-12;
+
+using RowMat3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
+
+void check_finite(const Positions& X, const char* where, const char* what) {
+  if (X.allFinite()) return;
+  for (Eigen::Index v = 0; v < X.rows(); ++v)
+    if (!X.row(v).allFinite())
+      throw InvalidInput(std::string(where) + ": vertex " + std::to_string(v) + " of " + what +
+                         " has a non-finite coordinate");
+}
+
+void check_faces(const Faces& F, Eigen::Index num_vertices, const char* where, const char* what) {
+  if (F.rows() == 0) throw InvalidInput(std::string(where) + ": " + what + " has no face");
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (F(f, k) < 0 || F(f, k) >= num_vertices)
+        throw InvalidInput(std::string(where) + ": face " + std::to_string(f) + " of " + what +
+                           " has vertex index " + std::to_string(F(f, k)) + " out of range [0, " +
+                           std::to_string(num_vertices) + ")");
+}
+
+bool degenerate(const Vec3& e1, const Vec3& e2, const Vec3& n) {
+  const double longest2 = std::max({e1.squaredNorm(), e2.squaredNorm(), (e2 - e1).squaredNorm()});
+  return !(n.norm() > 2 * kDegenerateAreaRatio * longest2);  // also catches NaN
+}
+
+// Sumner & Popović's frame [e1, e2, n / √‖n‖] of a triangle (columns); a zero normal gives a zero column.
+Mat3 triangle_frame(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 e1 = b - a, e2 = c - a, n = e1.cross(e2);
+  const double len = n.norm();
+  Mat3 V;
+  V.col(0) = e1;
+  V.col(1) = e2;
+  V.col(2) = len > 0 ? Vec3(n / std::sqrt(len)) : Vec3::Zero();
+  return V;
+}
+
+// The displacement direction of NormalDisplacements at barycentrics w of base face f.
+Vec3 phong_direction(const Positions& X, const Positions& N, const Faces& F, int f, const Vec3& w) {
+  const Vec3 m = w[0] * Vec3(N.row(F(f, 0))) + w[1] * Vec3(N.row(F(f, 1))) + w[2] * Vec3(N.row(F(f, 2)));
+  const double len = m.norm();
+  if (len > kMinNormalLength) return m / len;
+  const Vec3 a = X.row(F(f, 0));
+  const Vec3 n = (Vec3(X.row(F(f, 1))) - a).cross(Vec3(X.row(F(f, 2))) - a);
+  const double n_len = n.norm();
+  return n_len > 0 ? Vec3(n / n_len) : Vec3::Zero();
+}
+
+// CSR lists of the faces around each vertex.
+void vertex_faces(const Faces& F, long num_vertices, std::vector<int>& offsets, std::vector<int>& faces) {
+  offsets.assign(num_vertices + 1, 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++offsets[F(f, k) + 1];
+  for (long v = 0; v < num_vertices; ++v) offsets[v + 1] += offsets[v];
+  faces.resize(offsets.back());
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) faces[fill[F(f, k)]++] = static_cast<int>(f);
+}
+
+int find_root(std::vector<int>& parent, int v) {
+  while (parent[v] != v) v = parent[v] = parent[parent[v]];
+  return v;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+DeformationTransfer::DeformationTransfer(const NormalDisplacementOptions& normal_options)
+    : normal_(normal_options) {}
+
+void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) {
+  const char* where = "DeformationTransfer::encode";
+  const auto t0 = std::chrono::steady_clock::now();
+  check_faces(Fs, S.rows(), where, "S");
+  check_faces(Fb, B.rows(), where, "B");
+  check_finite(S, where, "S");
+  check_finite(B, where, "B");
+  const long ns = static_cast<long>(S.rows()), nfs = static_cast<long>(Fs.rows());
+  const long nb = static_cast<long>(B.rows()), nfb = static_cast<long>(Fb.rows());
+  std::vector<int> anchors = anchors_;
+  for (int a : anchors)
+    if (a < 0 || a >= ns)
+      throw InvalidInput(std::string(where) + ": anchor vertex " + std::to_string(a) + " out of range [0, " +
+                         std::to_string(ns) + ")");
+  std::sort(anchors.begin(), anchors.end());
+  anchors.erase(std::unique(anchors.begin(), anchors.end()), anchors.end());
+
+  encoded_ = false;  // stays so if anything below throws
+  Report report;
+  normal_.encode(S, Fs, B, Fb);
+  base_faces_ = Fb;
+  num_base_vertices_ = static_cast<int>(nb);
+
+  // Frames of the base triangles; degenerate ones borrow from the nearest usable face (multi-source
+  // breadth-first search over faces sharing a vertex).
+  frame_inverse_.resize(nfb, 9);
+  frame_face_.setConstant(nfb, -1);
+  std::vector<char> usable(nfb, 0);
+  parallel_for_chunks(nfb, [&](long begin, long end) {
+    for (long f = begin; f < end; ++f) {
+      const Vec3 a = B.row(Fb(f, 0)), b = B.row(Fb(f, 1)), c = B.row(Fb(f, 2));
+      if (degenerate(b - a, c - a, (b - a).cross(c - a))) continue;
+      const RowMat3 inverse = triangle_frame(a, b, c).inverse();
+      if (!inverse.allFinite()) continue;
+      frame_inverse_.row(f) = Eigen::Map<const Eigen::Matrix<double, 1, 9>>(inverse.data());
+      usable[f] = 1;
+    }
+  });
+  {
+    std::vector<int> offsets, around;
+    vertex_faces(Fb, nb, offsets, around);
+    std::vector<int> queue;
+    queue.reserve(nfb);
+    for (long f = 0; f < nfb; ++f)
+      if (usable[f]) {
+        frame_face_[f] = static_cast<int>(f);
+        queue.push_back(static_cast<int>(f));
+      }
+    report.degenerate_base_faces = static_cast<int>(nfb - static_cast<long>(queue.size()));
+    for (size_t q = 0; q < queue.size() && report.degenerate_base_faces > 0; ++q) {
+      const int f = queue[q];
+      for (int k = 0; k < 3; ++k) {
+        const int v = Fb(f, k);
+        for (int i = offsets[v]; i < offsets[v + 1]; ++i)
+          if (frame_face_[around[i]] < 0) {
+            frame_face_[around[i]] = frame_face_[f];
+            queue.push_back(around[i]);
+          }
+      }
+    }
+  }
+
+  // Triangle correspondence S → B.
+  report.identical_connectivity = ns == nb && nfs == nfb && (Fs.array() == Fb.array()).all();
+  source_face_.resize(nfs);
+  if (report.identical_connectivity) {
+    std::iota(source_face_.data(), source_face_.data() + nfs, 0);
+  } else {
+    Positions centroids(nfs, 3);
+    for (long t = 0; t < nfs; ++t)
+      centroids.row(t) = (S.row(Fs(t, 0)) + S.row(Fs(t, 1)) + S.row(Fs(t, 2))) / 3;
+    NormalDisplacements centroid_feet(normal_.options());
+    centroid_feet.encode(centroids, Faces(), B, Fb);
+    source_face_ = centroid_feet.base_faces();
+  }
+  for (long t = 0; t < nfs; ++t) {
+    source_face_[t] = frame_face_[source_face_[t]];
+    if (source_face_[t] < 0) ++report.unreachable_faces;
+  }
+
+  // Per-face gradients of S's hat functions: the Poisson matrix Q = Σ_t A_t ∇φ_a·∇φ_b (= −W, the cotan
+  // weights without their clamp) and the corner vectors q_{t,k} = −A_t Σ_m s_m (∇φ_m·∇φ_k), both from the
+  // same numbers so that G = identity gives back S exactly.
+  std::vector<Triplet> triplets;
+  triplets.reserve(9 * nfs);
+  using FaceBlocks = Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor>;
+  FaceBlocks face_q = FaceBlocks::Zero(nfs, 9);
+  std::vector<int> parent(ns);
+  std::iota(parent.begin(), parent.end(), 0);
+  for (long t = 0; t < nfs; ++t) {
+    Vec3 p[3];
+    for (int k = 0; k < 3; ++k) p[k] = S.row(Fs(t, k));
+    const Vec3 n = (p[1] - p[0]).cross(p[2] - p[0]);
+    if (degenerate(p[1] - p[0], p[2] - p[0], n)) continue;
+    const double area2 = n.norm(), area = area2 / 2;
+    const Vec3 unit = n / area2;
+    Vec3 g[3];
+    for (int k = 0; k < 3; ++k) g[k] = unit.cross(p[(k + 2) % 3] - p[(k + 1) % 3]) / area2;
+    for (int k = 0; k < 3; ++k) {
+      Vec3 q = Vec3::Zero();
+      for (int m = 0; m < 3; ++m) {
+        const double w = area * g[k].dot(g[m]);
+        triplets.emplace_back(Fs(t, k), Fs(t, m), w);
+        q -= w * p[m];
+      }
+      face_q.block<1, 3>(t, 3 * k) = q.transpose();
+    }
+    for (int k = 1; k < 3; ++k) {
+      const int a = find_root(parent, Fs(t, 0)), b = find_root(parent, Fs(t, k));
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  }
+  SparseMatrix Q(ns, ns);
+  Q.setFromTriplets(triplets.begin(), triplets.end());
+  triplets = std::vector<Triplet>();
+
+  // Corners grouped by vertex, for a race-free per-vertex right-hand side.
+  vertex_faces(Fs, ns, corner_offsets_, corner_face_);
+  corner_q_.resize(corner_face_.size(), 3);
+  for (long v = 0; v < ns; ++v)
+    for (int c = corner_offsets_[v]; c < corner_offsets_[v + 1]; ++c) {
+      const int t = corner_face_[c];
+      const int k = Fs(t, 0) == v ? 0 : Fs(t, 1) == v ? 1 : 2;
+      corner_q_.row(c) = face_q.block<1, 3>(t, 3 * k);
+    }
+
+  // Constraints: the anchors, plus the lowest vertex of every component (over non-degenerate faces)
+  // without one. (A face with a repeated vertex is degenerate, q = 0, so the corner lookup above may
+  // pick either of its corners for that vertex.)
+  std::vector<char> component_anchored(ns, 0);
+  for (int a : anchors) component_anchored[find_root(parent, a)] = 1;
+  std::vector<int> known = anchors;
+  for (long v = 0; v < ns; ++v) {
+    const int root = find_root(parent, static_cast<int>(v));
+    if (!component_anchored[root]) {
+      component_anchored[root] = 1;
+      known.push_back(static_cast<int>(v));
+      report.pinned_vertices.push_back(static_cast<int>(v));
+    }
+  }
+  system_.prepare(Q, known);
+
+  // What a frame needs: gradients of the base faces that triangles at unknown vertices read, and normals
+  // of the base vertices around the constrained vertices' base points.
+  std::vector<char> is_known(ns, 0);
+  for (int v : known) is_known[v] = 1;
+  std::vector<char> needed(nfb, 0);
+  for (long t = 0; t < nfs; ++t)
+    if (source_face_[t] >= 0 && !(is_known[Fs(t, 0)] && is_known[Fs(t, 1)] && is_known[Fs(t, 2)]))
+      needed[source_face_[t]] = 1;
+  gradient_faces_.clear();
+  for (long f = 0; f < nfb; ++f)
+    if (needed[f]) gradient_faces_.push_back(static_cast<int>(f));
+  std::vector<char> needs_normal(nb, 0);
+  for (int v : known)
+    for (int k = 0; k < 3; ++k) needs_normal[Fb(normal_.base_faces()[v], k)] = 1;
+  {
+    std::vector<int> offsets, around;
+    vertex_faces(Fb, nb, offsets, around);
+    std::vector<char> face_needed(nfb, 0);
+    normal_vertices_.clear();
+    normal_offsets_.assign(1, 0);
+    normal_faces_.clear();
+    for (long v = 0; v < nb; ++v)
+      if (needs_normal[v]) {
+        normal_vertices_.push_back(static_cast<int>(v));
+        for (int i = offsets[v]; i < offsets[v + 1]; ++i) {
+          normal_faces_.push_back(around[i]);
+          face_needed[around[i]] = 1;
+        }
+        normal_offsets_.push_back(static_cast<int>(normal_faces_.size()));
+      }
+    normal_face_list_.clear();
+    for (long f = 0; f < nfb; ++f)
+      if (face_needed[f]) normal_face_list_.push_back(static_cast<int>(f));
+  }
+
+  face_normals_.setZero(nfb, 3);
+  vertex_normals_.setZero(nb, 3);
+  gradient_.setZero(nfb, 9);
+  rhs_.resize(system_.unknown().size(), 3);
+  known_values_.resize(known.size(), 3);
+  report.factor_seconds = seconds_since(t0);
+  report_ = std::move(report);
+  encoded_ = true;
+}
+
+void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& out) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const char* where = "DeformationTransfer::reconstruct";
+  if (!encoded_) throw UsageError(std::string(where) + ": called before encode()");
+  if (B_deformed.rows() != num_base_vertices_)
+    throw UsageError(std::string(where) + ": deformed base has " + std::to_string(B_deformed.rows()) +
+                     " vertices, the encoded base had " + std::to_string(num_base_vertices_));
+  check_finite(B_deformed, where, "the deformed base");
+
+  // G = V' V⁻¹ for the base faces the unknown vertices' triangles read.
+  parallel_for_chunks(static_cast<long>(gradient_faces_.size()), [&](long begin, long end) {
+    for (long k = begin; k < end; ++k) {
+      const int f = gradient_faces_[k];
+      const Mat3 V =
+          triangle_frame(Vec3(B_deformed.row(base_faces_(f, 0))), Vec3(B_deformed.row(base_faces_(f, 1))),
+                         Vec3(B_deformed.row(base_faces_(f, 2))));
+      const RowMat3 G = V * Eigen::Map<const RowMat3>(frame_inverse_.row(f).data());
+      gradient_.row(f) = Eigen::Map<const Eigen::Matrix<double, 1, 9>>(G.data());
+    }
+  });
+
+  // Reduced right-hand side Q_uu x_u = −(f_u + Q_uk x_k), f_i = Σ G_t q_{t,k} over the corners at vertex i.
+  const std::vector<int>& unknown = system_.unknown();
+  parallel_for_chunks(static_cast<long>(unknown.size()), [&](long begin, long end) {
+    for (long r = begin; r < end; ++r) {
+      const int i = unknown[r];
+      Vec3 sum = Vec3::Zero();
+      for (int c = corner_offsets_[i]; c < corner_offsets_[i + 1]; ++c) {
+        const int s = source_face_[corner_face_[c]];
+        const Vec3 q = corner_q_.row(c).transpose();
+        if (s >= 0)
+          sum += Eigen::Map<const RowMat3>(gradient_.row(s).data()) * q;
+        else
+          sum += q;
+      }
+      rhs_.row(r) = -sum.transpose();
+    }
+  });
+
+  // Dirichlet values: the normal-displacement reconstruction b' + h n' of the constrained vertices, with
+  // B' vertex normals (area weighted, as VertexNormals) only where their Phong normals need them.
+  parallel_for_chunks(static_cast<long>(normal_face_list_.size()), [&](long begin, long end) {
+    for (long k = begin; k < end; ++k) {
+      const int f = normal_face_list_[k];
+      const Vec3 p0 = B_deformed.row(base_faces_(f, 0)), p1 = B_deformed.row(base_faces_(f, 1)),
+                 p2 = B_deformed.row(base_faces_(f, 2));
+      face_normals_.row(f) = (p1 - p0).cross(p2 - p0).transpose();  // length 2 · area: area weighting
+    }
+  });
+  parallel_for_chunks(static_cast<long>(normal_vertices_.size()), [&](long begin, long end) {
+    for (long k = begin; k < end; ++k) {
+      Vec3 n = Vec3::Zero();
+      for (int c = normal_offsets_[k]; c < normal_offsets_[k + 1]; ++c)
+        n += face_normals_.row(normal_faces_[c]);
+      const double len = n.norm();
+      vertex_normals_.row(normal_vertices_[k]) = (len > 0 ? Vec3(n / len) : Vec3::Zero()).transpose();
+    }
+  });
+  const std::vector<int>& known = system_.known();
+  const Eigen::VectorXi& face = normal_.base_faces();
+  const Eigen::MatrixX3d& bary = normal_.barycentrics();
+  const Eigen::VectorXd& height = normal_.heights();
+  parallel_for_chunks(static_cast<long>(known.size()), [&](long begin, long end) {
+    for (long k = begin; k < end; ++k) {
+      const int i = known[k], f = face[i];
+      const Vec3 w = bary.row(i);
+      const Vec3 b = w[0] * Vec3(B_deformed.row(base_faces_(f, 0))) +
+                     w[1] * Vec3(B_deformed.row(base_faces_(f, 1))) +
+                     w[2] * Vec3(B_deformed.row(base_faces_(f, 2)));
+      known_values_.row(k) =
+          (b + height[i] * phong_direction(B_deformed, vertex_normals_, base_faces_, f, w)).transpose();
+    }
+  });
+
+  if (!unknown.empty()) {
+    rhs_.noalias() -= system_.coupling() * known_values_;
+    system_.solver().solve(rhs_, solution_);
+  }
+  const long ns = static_cast<long>(unknown.size() + known.size());
+  if (out.rows() != ns) out.resize(ns, 3);
+  std::atomic<bool> finite{true};
+  parallel_for_chunks(static_cast<long>(unknown.size()), [&](long begin, long end) {
+    for (long r = begin; r < end; ++r) out.row(unknown[r]) = solution_.row(r);
+    if (!solution_.middleRows(begin, end - begin).allFinite()) finite = false;
+  });
+  for (size_t k = 0; k < known.size(); ++k) out.row(known[k]) = known_values_.row(k);
+  if (!finite) throw InvalidInput(std::string(where) + ": non-finite result from a finite base (overflow?)");
+  report_.seconds = seconds_since(t0);
+}
+
+}  // namespace msd

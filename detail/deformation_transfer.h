@@ -1,0 +1,106 @@
+#pragma once
+//! \file Deformation transfer as a detail encoding (seed 9.3.3; Botsch, Sumner, Pauly & Gross 2006,
+//! "Deformation transfer for detail-preserving surface editing", after Sumner & Popović 2004): the
+//! deformation B → B' is measured per base triangle as a 3×3 deformation gradient, applied to the
+//! corresponding triangles of S, and S' is the surface whose gradients best match (one Poisson solve).
+
+#include <string>
+#include <vector>
+
+#include "core/solver.h"
+#include "core/types.h"
+#include "detail/encoding.h"
+#include "detail/normal_displacements.h"
+
+namespace msd {
+
+//! Deformation-transfer detail encoding ("transfer").
+//!
+//! Deformation gradients (Sumner & Popović 2004, eqs. 1–4): a base triangle (b1, b2, b3) gets the frame
+//! V = [b2 − b1, b3 − b1, n / √‖n‖] with n = (b2 − b1) × (b3 − b1) (the fourth, normal-offset vertex
+//! b4 = b1 + n / √‖n‖ scales like an edge), and the gradient of B → B' on it is G = V' V⁻¹. V⁻¹ is
+//! computed once in encode(). A base triangle of (near) zero area has no frame: it borrows the gradient
+//! of the nearest usable base triangle (breadth first over shared vertices); see report().
+//!
+//! Triangle correspondence S → B: with identical connectivity (#Vs = #Vb and Fs = Fb) triangle t of S
+//! takes the gradient of triangle t of B. Otherwise the centroid of each triangle of S is projected
+//! onto B along B's Phong normals (the base-point search of NormalDisplacements) and the triangle takes
+//! the gradient of the base triangle holding that foot point.
+//!
+//! Reconstruction (seed Fig. 9.10 form; Botsch et al. 2006 eq. 5): minimise over the positions x of S'
+//!   Σ_t A_t ‖∇x|_t − G_t ∇s|_t‖²
+//! with A_t, ∇ the areas and piecewise-linear gradient of S. Its normal equations are the Poisson system
+//! (−W) x = −D (G ∇S) in msdeform's convention (W = cotan weights of S, D = divergence, D·∇ = W). The
+//! right-hand side is linear in the G_t: row i is Σ G_t q_{t,k} over the corners k of the triangles t at
+//! vertex i, with q_{t,k} = −A_t (∇S|_t)ᵀ ∇φ_{t,k} precomputed, so a frame costs one pass over the
+//! corners. (−W) is assembled from the same per-face gradients as the q_{t,k} (it equals −W of
+//! cotan_laplacian() up to that function's cotangent clamp), so G = identity gives back S to rounding.
+//! The matrix depends on S only: it is factored once in encode() (ConstrainedQuadratic) and each frame
+//! back-substitutes three columns.
+//!
+//! Dirichlet constraints: the anchor vertices (set_anchor_vertices, e.g. the multi-scale deformer's fixed
+//! and handle vertices) are placed at their normal-displacement reconstruction b'_i + h_i n'_i on B'
+//! (= B' exactly where S = B, as on the deformer's constrained vertices). A connected component of S
+//! without an anchor — e.g. all of S when no anchors are given — has its lowest-indexed vertex pinned the
+//! same way, so the system is positive definite (report().pinned_vertices).
+//! reconstruct() is O(#Vs + #Fs + #Fb) plus the back-substitution, parallel, allocation-free once `out`
+//! has #Vs rows. Not safe to call concurrently on one object.
+class DeformationTransfer : public DetailEncoding {
+ public:
+  struct Report {
+    bool identical_connectivity = false;  //!< triangle t of S ↔ triangle t of B
+    int degenerate_base_faces = 0;        //!< base triangles without a frame (they borrow a neighbour's)
+    std::vector<int> pinned_vertices;     //!< vertices pinned because their component had no anchor
+    int unreachable_faces = 0;            //!< S triangles left with G = identity (no usable base triangle)
+    double factor_seconds = 0;            //!< wall time of encode() (base points, correspondence, factor)
+    double seconds = 0;                   //!< wall time of the last reconstruct()
+  };
+
+  explicit DeformationTransfer(const NormalDisplacementOptions& normal_options = {});
+
+  std::string name() const override { return "transfer"; }
+
+  //! S: #Vs by 3 with faces Fs (#Fs by 3); B: #Vb by 3 with faces Fb (#Fb by 3); connectivities may differ.
+  //! \throw InvalidInput for a face or anchor index out of range, a non-finite coordinate or an empty face
+  //! list; as NormalDisplacements::encode(); SolverError if the Poisson system cannot be factored.
+  void encode(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) override;
+
+  //! S' (#Vs by 3) for the deformed base B' (#Vb by 3, connectivity Fb).
+  //! \throw UsageError before encode() or when B' does not have #Vb rows; InvalidInput if B' has a
+  //! non-finite coordinate.
+  void reconstruct(const Positions& B_deformed, Positions& out) override;
+
+  bool encoded() const { return encoded_; }
+  const Report& report() const { return report_; }
+  //! #Fs: the base triangle whose gradient each triangle of S takes.
+  const Eigen::VectorXi& source_faces() const { return source_face_; }
+  //! The vertices held fixed in the solve (anchors, then pinned vertices), in solve order.
+  const std::vector<int>& constrained_vertices() const { return system_.known(); }
+  const NormalDisplacements& normal_displacements() const { return normal_; }
+
+ private:
+  NormalDisplacements normal_;
+  bool encoded_ = false;
+  int num_base_vertices_ = 0;
+  Faces base_faces_;
+  // Per base face: V⁻¹ (row-major 3×3) and the face whose frame it uses (itself unless degenerate).
+  Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> frame_inverse_;
+  Eigen::VectorXi frame_face_;
+  Eigen::VectorXi source_face_;      // per S face, already resolved through frame_face_ (−1: identity)
+  std::vector<int> gradient_faces_;  // base faces whose G a frame needs (sources of faces at unknowns)
+  // CSR corners of S by vertex: corner_face_[c] = the S face, corner_q_ row c = q_{t,k}.
+  std::vector<int> corner_offsets_, corner_face_;
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> corner_q_;
+  ConstrainedQuadratic system_;
+  // Base vertices whose normals the constrained vertices' Phong normals read, with their faces (CSR, in
+  // face order, so the sums match VertexNormals bit for bit).
+  std::vector<int> normal_vertices_, normal_offsets_, normal_faces_, normal_face_list_;
+  Report report_;
+  // Per-frame buffers.
+  Positions vertex_normals_;  // #Vb by 3, only the rows of normal_vertices_ are kept up to date
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> face_normals_;  // rows of normal_face_list_
+  Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> gradient_;      // G per base face
+  Eigen::MatrixXd rhs_, known_values_, solution_;  // reduced system: rows of system_.unknown()
+};
+
+}  // namespace msd

@@ -1,0 +1,31 @@
+#pragma once
+//! \file Every editing method msdeform can build, by name: the command line and the comparison app
+//! iterate over these.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "decomposition/fairing.h"
+#include "deformation/deformer.h"
+#include "deformation/propagation.h"
+#include "deformation/shell.h"
+
+namespace msd {
+
+//! Settings shared by the named methods (each method reads the parts that concern it).
+struct MethodOptions {
+  ShellOptions shell;               //!< shell, and the base operator of every multiscale-* method
+  PropagationOptions propagation;   //!< propagate
+  FairingOrder fairing = FairingOrder::ThinPlate;  //!< multiscale-*: decomposition
+  double remesh_base_edge_length = 0;  //!< multiscale-*: > 0 remeshes the base isotropically (CGAL)
+};
+
+//! "shell", "propagate", then "multiscale-<encoding>" for each detail encoding.
+std::vector<std::string> method_names();
+
+//! The named method, configured. \throw InvalidInput for an unknown name (listing the known ones) or
+//! invalid options.
+std::unique_ptr<Deformer> make_deformer(const std::string& name, const MethodOptions& options = {});
+
+}  // namespace msd

@@ -1,0 +1,135 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <utility>
+#include <vector>
+
+#include "core/errors.h"
+#include "core/laplacian.h"
+#include "core/scenes.h"
+#include "decomposition/remesh.h"
+#include "test_util.h"
+
+using namespace msd;
+using Catch::Matchers::Contains;
+
+namespace {
+
+// Directed edge (a, b) of each face → count of faces using the undirected edge.
+std::map<std::pair<int, int>, int> edge_faces(const Faces& F) {
+  std::map<std::pair<int, int>, int> count;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++count[std::minmax(F(f, k), F(f, (k + 1) % 3))];
+  return count;
+}
+
+std::set<int> border_vertices(const Faces& F) {
+  std::set<int> border;
+  for (const auto& [edge, faces] : edge_faces(F))
+    if (faces == 1) border.insert(edge.first), border.insert(edge.second);
+  return border;
+}
+
+bool on_unit_square_border(const Vec3& p) {
+  const double eps = 1e-12;
+  return std::abs(p.x()) < eps || std::abs(p.x() - 1) < eps || std::abs(p.y()) < eps ||
+         std::abs(p.y() - 1) < eps;
+}
+
+}  // namespace
+
+TEST_CASE("remesh_isotropic: open flat square keeps its outline and area", "[decomposition][remesh]") {
+  SceneOptions o;
+  o.resolution = 2000;
+  const Scene s = make_surface(SceneShape::Plane, o);  // flat base: the regular grid of the unit square
+  const double target = 0.05;  // longer than the input's edges (~0.023): the interior gets coarser
+  const RemeshResult r = remesh_isotropic(s.smooth, s.F, target);
+  REQUIRE(r.P.rows() > 0);
+  REQUIRE(r.F.rows() > 0);
+  CHECK(r.P.allFinite());
+  CHECK(r.F.minCoeff() >= 0);
+  CHECK(r.F.maxCoeff() < r.P.rows());
+  CHECK(r.P.rows() != s.smooth.rows());
+  // Every vertex stays in the plane (projection onto the input); area and orientation are kept.
+  CHECK(r.P.col(2).cwiseAbs().maxCoeff() <= 1e-12);
+  CHECK(face_areas(r.P, r.F).sum() == Approx(1.0).epsilon(1e-10));
+  for (Eigen::Index f = 0; f < r.F.rows(); ++f) {
+    const Vec3 a = r.P.row(r.F(f, 0)), b = r.P.row(r.F(f, 1)), c = r.P.row(r.F(f, 2));
+    REQUIRE((b - a).cross(c - a).z() > 0);
+  }
+  // Border: the result's border vertices lie on the square's outline, and every input border vertex
+  // (corners included) is still there at the same place (border edges are protected).
+  const std::set<int> border = border_vertices(r.F);
+  for (int v : border) REQUIRE(on_unit_square_border(r.P.row(v)));
+  int kept = 0;
+  const std::set<int> input_border = border_vertices(s.F);
+  for (int v : input_border)
+    for (int w : border)
+      if ((r.P.row(w) - s.smooth.row(v)).norm() <= 1e-14) {
+        ++kept;
+        break;
+      }
+  CHECK(kept == static_cast<int>(input_border.size()));
+  // Interior edges come out near the target (CGAL keeps them within [4/5, 4/3] of it, then relaxes).
+  double sum = 0;
+  int count = 0;
+  for (const auto& [edge, faces] : edge_faces(r.F))
+    if (faces == 2 && !border.count(edge.first) && !border.count(edge.second)) {
+      sum += (r.P.row(edge.first) - r.P.row(edge.second)).norm();
+      ++count;
+    }
+  REQUIRE(count > 0);
+  const double mean = sum / count;
+  INFO("input " << s.smooth.rows() << " vertices -> " << r.P.rows() << ", mean interior edge " << mean);
+  CHECK(mean >= 0.75 * target);
+  CHECK(mean <= 1.25 * target);
+}
+
+TEST_CASE("remesh_isotropic: closed sphere stays closed and on the input", "[decomposition][remesh]") {
+  Positions P;
+  Faces F;
+  test::icosphere(3, P, F);  // 642 vertices, edges ~0.1
+  const RemeshResult r = remesh_isotropic(P, F, 0.06, 3);
+  for (const auto& [edge, faces] : edge_faces(r.F)) REQUIRE(faces == 2);
+  CHECK(static_cast<long>(r.P.rows()) - static_cast<long>(edge_faces(r.F).size()) + r.F.rows() ==
+        2);  // Euler
+  CHECK(r.P.rows() > P.rows());
+  // Vertices are projected onto the inscribed polyhedron: between its inradius and the unit sphere.
+  const Eigen::VectorXd radius = r.P.rowwise().norm();
+  CHECK(radius.maxCoeff() <= 1 + 1e-12);
+  CHECK(radius.minCoeff() >= 0.99);
+}
+
+TEST_CASE("remesh_isotropic: bumpy plane, zero iterations, and bad input",
+          "[decomposition][remesh][bad-input]") {
+  SceneOptions o;
+  o.resolution = 2000;
+  const Scene s = make_surface(SceneShape::Plane, o);
+  const RemeshResult r = remesh_isotropic(s.P, s.F, 0.02, 2);
+  CHECK(r.P.allFinite());
+  for (int v : border_vertices(r.F)) REQUIRE(on_unit_square_border(r.P.row(v)));
+  // Zero iterations only splits the border edges longer than the target.
+  const RemeshResult same = remesh_isotropic(s.smooth, s.F, 1.0, 0);
+  CHECK(same.P.rows() == s.smooth.rows());
+  CHECK(same.F.rows() == s.F.rows());
+
+  for (double bad :
+       {0.0, -0.1, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()})
+    CHECK_THROWS_WITH(remesh_isotropic(s.P, s.F, bad), Contains("target edge length"));
+  CHECK_THROWS_AS(remesh_isotropic(s.P, s.F, 0.05, -1), InvalidInput);
+  Faces out_of_range = s.F;
+  out_of_range(3, 1) = static_cast<int>(s.P.rows());
+  CHECK_THROWS_WITH(remesh_isotropic(s.P, out_of_range, 0.05),
+                    Contains("face 3") && Contains("out of range"));
+  Faces non_manifold = s.F;
+  non_manifold.conservativeResize(s.F.rows() + 1, 3);
+  non_manifold.row(s.F.rows()) = s.F.row(0);  // the same triangle twice
+  CHECK_THROWS_WITH(remesh_isotropic(s.P, non_manifold, 0.05),
+                    Contains("face " + std::to_string(s.F.rows())) && Contains("non-manifold"));
+  Positions nan = s.P;
+  nan(5, 0) = std::nan("");
+  CHECK_THROWS_WITH(remesh_isotropic(nan, s.F, 0.05), Contains("vertex 5"));
+}

@@ -1,0 +1,135 @@
+#include <catch2/catch.hpp>
+
+#include "core/errors.h"
+#include "core/scenes.h"
+#include "decomposition/fairing.h"
+#include "detail/displacement_vectors.h"
+#include "detail/normal_displacements.h"
+#include "reconstruction/multiscale.h"
+#include "test_util.h"
+
+using namespace msd;
+using Catch::Matchers::Contains;
+
+namespace {
+
+Scene scene(const std::string& name) {
+  SceneOptions o;
+  o.resolution = 6000;
+  return make_scene(name, o);
+}
+
+}  // namespace
+
+TEST_CASE("multiscale: identity transforms reconstruct S for every encoding", "[reconstruction][multiscale]") {
+  const Scene s = scene("bend120");
+  const Mesh mesh = make_mesh(s.P, s.F);
+  const double diag = bounding_box_diagonal(s.P);
+  for (const auto& enc : encoding_names()) {
+    MultiscaleOptions o;
+    o.encoding = enc;
+    MultiscaleDeformer ms(o);
+    ms.prepare(mesh, s.region);
+    INFO(enc);
+    CHECK((ms.deform({Mat4::Identity()}) - s.P).cwiseAbs().maxCoeff() <= 1e-9 * diag);
+    // The base is smooth where S has bumps: decomposition separated the details.
+    double free_detail = 0;
+    for (int v : s.region.free_vertices()) free_detail = std::max(free_detail, (s.P.row(v) - ms.base().row(v)).norm());
+    CHECK(free_detail > 0.5 * s.bump_height);
+  }
+}
+
+TEST_CASE("multiscale: Fig. 9.5, lifting keeps the bumps' heights where plain shell distorts them",
+          "[reconstruction][multiscale]") {
+  const Scene s = scene("lift");
+  const Mesh mesh = make_mesh(s.P, s.F);
+  // The top vertex of every bump in the free region.
+  std::vector<int> tops;
+  for (int v : s.region.free_vertices())
+    if (s.heights[v] >= 0.999 * s.bump_height) tops.push_back(v);
+  REQUIRE(tops.size() == 60);  // 6 columns of bumps in the free strip 0.2 < x < 0.8, 10 rows
+  // Heights are measured over one common smooth surface for every method: the faired base B and its
+  // shell deformation B' (the intended global shape). Fairing each result on its own instead is only
+  // accurate to 5-9% of the bump height where the lift curves most (measured at 6k and 25k vertices),
+  // too coarse for a 5% claim.
+  MultiscaleDeformer reference;
+  reference.prepare(mesh, s.region);
+  reference.deform(s.transforms);
+  const Positions& B = reference.base();
+  const Positions B1 = reference.deformed_base();
+  const Eigen::VectorXd rest = normal_displacement_heights(s.P, B, s.F);
+  auto height_change = [&](Deformer& d) {
+    d.prepare(mesh, s.region);
+    const Eigen::VectorXd h = normal_displacement_heights(d.deform(s.transforms), B1, s.F);
+    double worst = 0;
+    for (int v : tops) worst = std::max(worst, std::abs(h[v] - rest[v]));
+    return worst / s.bump_height;
+  };
+  ShellDeformer shell;
+  const double shell_change = height_change(shell);
+  MultiscaleOptions o;
+  o.encoding = "normal";
+  MultiscaleDeformer normal(o);
+  const double normal_change = height_change(normal);
+  o.encoding = "vectors";
+  MultiscaleDeformer vectors(o);
+  const double vectors_change = height_change(vectors);
+  INFO("max bump height change / bump height: shell " << shell_change << ", multiscale normal " << normal_change
+                                                        << ", multiscale vectors " << vectors_change);
+  CHECK(normal_change <= 0.05);
+  CHECK(vectors_change <= 0.05);
+  CHECK(shell_change > 0.1);  // the bumps keep their vertical direction on the slope, so they shrink along n
+  CHECK(shell_change > 3 * std::max(normal_change, vectors_change));
+}
+
+TEST_CASE("multiscale: Fig. 9.8, displacement vectors in global coordinates do not rotate with the base",
+          "[reconstruction][multiscale]") {
+  const Scene s = scene("bend120");
+  const Mesh mesh = make_mesh(s.P, s.F);
+  MultiscaleDeformer ms;
+  ms.prepare(mesh, s.region);
+  ms.deform(s.transforms);
+  const Positions& B = ms.base();
+  const Positions& B1 = ms.deformed_base();
+  DisplacementVectorOptions global_options;
+  global_options.frame = DisplacementFrame::Global;
+  DisplacementVectors local, global(global_options);
+  local.encode(s.P, s.F, B, s.F);
+  global.encode(s.P, s.F, B, s.F);
+  Positions out_local, out_global;
+  local.reconstruct(B1, out_local);
+  global.reconstruct(B1, out_global);
+  // At the bump tops near the handle the base has turned by almost 120°: the local details follow the
+  // new normal, the global ones still point along +z.
+  const Positions N0 = vertex_normals(B, s.F), N1 = vertex_normals(B1, s.F);
+  auto angle = [](const Positions& X, const Positions& base, const Positions& N, int v) {
+    return std::acos(std::clamp(Vec3(X.row(v) - base.row(v)).normalized().dot(Vec3(N.row(v))), -1.0, 1.0)) * 180 / M_PI;
+  };
+  double rest_angle = 0, local_angle = 0, global_angle = 0;
+  int count = 0;
+  for (int v : s.region.free_vertices())
+    if (s.heights[v] >= 0.999 * s.bump_height && s.P(v, 0) > 0.7) {
+      rest_angle += angle(s.P, B, N0, v);
+      local_angle += angle(out_local, B1, N1, v);
+      global_angle += angle(out_global, B1, N1, v);
+      ++count;
+    }
+  REQUIRE(count > 0);
+  INFO("mean angle between detail vector and base normal: rest " << rest_angle / count << " deg, local frames "
+                                                                 << local_angle / count << ", global " << global_angle / count);
+  CHECK(std::abs(local_angle - rest_angle) / count < 1.0);  // the details turned with the base
+  CHECK(global_angle / count > 60);                         // they did not
+}
+
+TEST_CASE("multiscale: handles are met and bad options are reported", "[reconstruction][multiscale]") {
+  const Scene s = scene("twist135");
+  MultiscaleDeformer ms;
+  ms.prepare(make_mesh(s.P, s.F), s.region);
+  const Positions out = ms.deform(s.transforms);
+  double err = 0;
+  for (int v : s.region.handle_vertices(0)) err = std::max(err, (Vec3(out.row(v)) - transform_point(s.transforms[0], s.P.row(v))).norm());
+  CHECK(err <= 1e-9);
+  MultiscaleOptions bad;
+  bad.encoding = "volume";
+  CHECK_THROWS_WITH(MultiscaleDeformer(bad), Contains("unknown detail encoding 'volume'") && Contains("normal"));
+}

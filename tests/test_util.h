@@ -3,6 +3,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <algorithm>
+#include <cmath>
 #include <map>
 #include <random>
 #include <string>
@@ -89,5 +91,30 @@ inline void jittered_grid(int n, double jitter, Positions& P, Faces& F, std::vec
       F.row(f++) << a, d, c;
     }
 }
+
+// Rolls the plane z = 0 up onto a circular arc along x: x < x0 stays, [x0, x0 + R θ] goes onto the arc of
+// radius R around (x0, ·, R) (concave side up, +z), the rest continues along the arc's end tangent. A point
+// at height z above the plane goes to arc(x) + z n(x): the exact bend of a thick plate. With x0 = 0.2,
+// R θ = 0.6 this is the bend120 scene: its handle transform is this map on x > 0.8.
+struct ArcBend {
+  double x0, R, theta;
+  double angle(double x) const { return std::clamp((x - x0) / R, 0.0, theta); }
+  Vec3 normal(double x) const {
+    const double phi = angle(x);
+    return Vec3(-std::sin(phi), 0, std::cos(phi));
+  }
+  Vec3 operator()(const Vec3& p) const {
+    const double phi = angle(p.x()), s = p.x() - x0;
+    Vec3 on_arc(x0 + R * std::sin(phi), p.y(), R * (1 - std::cos(phi)));
+    if (s < 0) on_arc.x() = p.x();
+    if (s > R * theta) on_arc += (s - R * theta) * Vec3(std::cos(theta), 0, std::sin(theta));
+    return on_arc + p.z() * normal(p.x());
+  }
+  Positions operator()(const Positions& P) const {
+    Positions out(P.rows(), 3);
+    for (Eigen::Index i = 0; i < P.rows(); ++i) out.row(i) = (*this)(Vec3(P.row(i))).transpose();
+    return out;
+  }
+};
 
 }  // namespace msd::test

@@ -31,30 +31,7 @@ Positions rigid_motion(const Positions& P, const Mat3& R, const Vec3& t) {
 
 Mat3 some_rotation() { return Eigen::AngleAxisd(1.3, Vec3(-0.4, 1, 0.6).normalized()).toRotationMatrix(); }
 
-// Rolls the plane z = 0 up onto a circular arc along x: x < x0 stays, [x0, x0 + R θ] goes onto the arc of
-// radius R around (x0, ·, R) (concave side up, +z), the rest continues along the arc's end tangent. A point
-// at height z above the plane goes to arc(x) + z n(x): the exact bend of a thick plate. With x0 = 0.2,
-// R θ = 0.6 this is the bend120 scene: its handle transform is this map on x > 0.8.
-struct ArcBend {
-  double x0, R, theta;
-  double angle(double x) const { return std::clamp((x - x0) / R, 0.0, theta); }
-  Vec3 normal(double x) const {
-    const double phi = angle(x);
-    return Vec3(-std::sin(phi), 0, std::cos(phi));
-  }
-  Vec3 operator()(const Vec3& p) const {
-    const double phi = angle(p.x()), s = p.x() - x0;
-    Vec3 on_arc(x0 + R * std::sin(phi), p.y(), R * (1 - std::cos(phi)));
-    if (s < 0) on_arc.x() = p.x();
-    if (s > R * theta) on_arc += (s - R * theta) * Vec3(std::cos(theta), 0, std::sin(theta));
-    return on_arc + p.z() * normal(p.x());
-  }
-  Positions operator()(const Positions& P) const {
-    Positions out(P.rows(), 3);
-    for (Eigen::Index i = 0; i < P.rows(); ++i) out.row(i) = (*this)(Vec3(P.row(i))).transpose();
-    return out;
-  }
-};
+using test::ArcBend;
 
 ArcBend bend120() { return {0.2, 0.6 / (120 * kPi / 180), 120 * kPi / 180}; }
 
@@ -68,13 +45,6 @@ int inverted_faces(const Positions& X, const Faces& F, const Positions& S, const
     if (!((b - a).cross(c - a).dot(bend.normal(x)) > 0)) ++count;
   }
   return count;
-}
-
-std::vector<int> anchors_of(const Region& region) {
-  std::vector<int> anchors;
-  for (int v = 0; v < region.num_vertices(); ++v)
-    if (!region.is_free(v)) anchors.push_back(v);
-  return anchors;
 }
 
 // The flat base one Loop level coarser than S (same plane, other connectivity and vertex count).
@@ -251,7 +221,7 @@ TEST_CASE("transfer: B' = B and rigid motions return S, same and other connectiv
   const Mat3 R = some_rotation();
   const Vec3 t(0.4, -2, 1);
   const Positions moved = rigid_motion(s.P, R, t);
-  const std::vector<int> anchors = anchors_of(s.region);
+  const std::vector<int> anchors = s.region.constrained_vertices();
 
   auto check_base = [&](const Positions& B, const Faces& Fb, const char* label) {
     INFO(label);
@@ -297,7 +267,7 @@ TEST_CASE("transfer: 120 degree bend, same and other base connectivity", "[detai
   o.resolution = 10000;
   const Scene s = make_surface(SceneShape::Plane, o);
   const ArcBend bend = bend120();
-  const std::vector<int> anchors = anchors_of(s.region);
+  const std::vector<int> anchors = s.region.constrained_vertices();
   const Positions exact = bend(s.P);  // the bumps bent with the plate: a reference, not the answer
 
   Positions B_coarse;
@@ -492,7 +462,7 @@ TEST_CASE("volumes and transfer: reconstruct reuses out", "[detail][volumes][tra
   const Positions bent = bend120()(s.smooth);
   DisplacementVolumes dv;
   DeformationTransfer dt;
-  dt.set_anchor_vertices(anchors_of(s.region));
+  dt.set_anchor_vertices(s.region.constrained_vertices());
   for (DetailEncoding* e : std::vector<DetailEncoding*>{&dv, &dt}) {
     e->encode(s.P, s.F, s.smooth, s.F);
     Positions out(s.P.rows(), 3);

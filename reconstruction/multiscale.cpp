@@ -26,16 +26,15 @@ std::unique_ptr<DetailEncoding> make_encoding(const std::string& name) {
 
 namespace {
 
-// Roles on a remeshed base: each vertex takes the role of the original base vertex nearest to it
-// (the corner of its closest triangle with the largest barycentric weight).
-Region transfer_region(const Positions& B, const Faces& F, const Region& region, const Positions& remeshed) {
-  const ClosestPointQuery query(B, F);
-  std::vector<int> codes(remeshed.rows());
-  for (Eigen::Index i = 0; i < remeshed.rows(); ++i) {
-    const ClosestPoint c = query.query(remeshed.row(i).transpose());
-    Eigen::Index corner;
-    c.barycentric.maxCoeff(&corner);
-    codes[i] = region.code(F(c.face, static_cast<int>(corner)));
+// Roles on a remeshed base: every triangle that holds the closest point of a fixed or handle vertex of
+// S gets that vertex's role on all its corners, so those vertices' base points move exactly with their
+// handle (or stay); all other base vertices are free.
+Region transfer_region(const Positions& S, const Region& region, const Positions& base, const Faces& base_faces) {
+  const ClosestPointQuery query(base, base_faces);
+  std::vector<int> codes(base.rows(), Region::kFree);
+  for (int v : region.constrained_vertices()) {
+    const ClosestPoint c = query.query(S.row(v).transpose());
+    for (int k = 0; k < 3; ++k) codes[base_faces(c.face, k)] = region.code(v);
   }
   return Region::from_codes(std::move(codes));
 }
@@ -59,9 +58,12 @@ void MultiscaleDeformer::do_prepare(const Mesh& mesh, const Region& region) {
   base_ = fair_region(mesh, region, fairing);  // S → B
   base_faces_ = F;
   Region base_region = region;
+  placed_.clear();
   if (options_.remesh_base_edge_length > 0) {
+    rest_ = S;
+    for (int v : region.constrained_vertices()) placed_.emplace_back(v, region.handle_of(v));
     RemeshResult r = remesh_isotropic(base_, F, options_.remesh_base_edge_length);
-    base_region = transfer_region(base_, F, region, r.P);
+    base_region = transfer_region(S, region, r.P, r.F);
     base_ = std::move(r.P);
     base_faces_ = std::move(r.F);
   }
@@ -75,6 +77,10 @@ void MultiscaleDeformer::do_prepare(const Mesh& mesh, const Region& region) {
 void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
   shell_.deform(transforms, base_deformed_);    // B → B'
   encoding_->reconstruct(base_deformed_, out);  // S' = B' ⊕ D
+  for (const auto& [v, k] : placed_) {
+    const Vec3 p = rest_.row(v);
+    out.row(v) = k < 0 ? p : transform_point(transforms[k], p);
+  }
 }
 
 }  // namespace msd

@@ -23,8 +23,10 @@ struct MultiscaleOptions {
   ShellOptions shell;
   //! > 0: remesh the base isotropically to this edge length before encoding (end of 9.3.2), for a
   //! well-shaped base whatever the triangles of S look like. Needs an encoding that allows different
-  //! connectivity (normal, volumes, transfer). The remeshed base takes each vertex's role (fixed, free,
-  //! handle k) from the nearest point of the original base.
+  //! connectivity (normal, volumes, transfer). On the remeshed base, the corners of every triangle that
+  //! holds the closest point of a fixed or handle vertex of S take that vertex's role; the rest are free.
+  //! The remeshed base only approximates S on the fixed and handle parts, so after reconstruction those
+  //! vertices of S are placed exactly (p, or T_k p) as with every other method.
   double remesh_base_edge_length = 0;
 };
 
@@ -57,6 +59,8 @@ class MultiscaleDeformer : public Deformer {
   std::unique_ptr<DetailEncoding> encoding_;
   Positions base_, base_deformed_;
   Faces base_faces_;
+  Positions rest_;                           // S, for placing constrained vertices on a remeshed base
+  std::vector<std::pair<int, int>> placed_;  // (vertex of S, handle or -1 for fixed) placed exactly
 };
 
 }  // namespace msd

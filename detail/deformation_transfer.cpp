@@ -9,34 +9,15 @@
 
 #include "core/errors.h"
 #include "core/parallel.h"
+#include "detail/phong.h"
 
 namespace msd {
 namespace {
 
 // Same degeneracy test as cotan_laplacian(): twice the area at most 2e-14 times the longest edge squared.
 constexpr double kDegenerateAreaRatio = 1e-14;
-// Matches NormalDisplacements (see displacement_direction there).
-constexpr double kMinNormalLength = 1e-12;
 
 using RowMat3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
-
-void check_finite(const Positions& X, const char* where, const char* what) {
-  if (X.allFinite()) return;
-  for (Eigen::Index v = 0; v < X.rows(); ++v)
-    if (!X.row(v).allFinite())
-      throw InvalidInput(std::string(where) + ": vertex " + std::to_string(v) + " of " + what +
-                         " has a non-finite coordinate");
-}
-
-void check_faces(const Faces& F, Eigen::Index num_vertices, const char* where, const char* what) {
-  if (F.rows() == 0) throw InvalidInput(std::string(where) + ": " + what + " has no face");
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k)
-      if (F(f, k) < 0 || F(f, k) >= num_vertices)
-        throw InvalidInput(std::string(where) + ": face " + std::to_string(f) + " of " + what +
-                           " has vertex index " + std::to_string(F(f, k)) + " out of range [0, " +
-                           std::to_string(num_vertices) + ")");
-}
 
 bool degenerate(const Vec3& e1, const Vec3& e2, const Vec3& n) {
   const double longest2 = std::max({e1.squaredNorm(), e2.squaredNorm(), (e2 - e1).squaredNorm()});
@@ -55,16 +36,6 @@ Mat3 triangle_frame(const Vec3& a, const Vec3& b, const Vec3& c) {
 }
 
 // The displacement direction of NormalDisplacements at barycentrics w of base face f.
-Vec3 phong_direction(const Positions& X, const Positions& N, const Faces& F, int f, const Vec3& w) {
-  const Vec3 m = w[0] * Vec3(N.row(F(f, 0))) + w[1] * Vec3(N.row(F(f, 1))) + w[2] * Vec3(N.row(F(f, 2)));
-  const double len = m.norm();
-  if (len > kMinNormalLength) return m / len;
-  const Vec3 a = X.row(F(f, 0));
-  const Vec3 n = (Vec3(X.row(F(f, 1))) - a).cross(Vec3(X.row(F(f, 2))) - a);
-  const double n_len = n.norm();
-  return n_len > 0 ? Vec3(n / n_len) : Vec3::Zero();
-}
-
 // CSR lists of the faces around each vertex.
 void vertex_faces(const Faces& F, long num_vertices, std::vector<int>& offsets, std::vector<int>& faces) {
   offsets.assign(num_vertices + 1, 0);
@@ -348,7 +319,9 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
                      w[1] * Vec3(B_deformed.row(base_faces_(f, 1))) +
                      w[2] * Vec3(B_deformed.row(base_faces_(f, 2)));
       known_values_.row(k) =
-          (b + height[i] * phong_direction(B_deformed, vertex_normals_, base_faces_, f, w)).transpose();
+          (b + height[i] * phong::direction(phong::Columns(B_deformed), phong::Columns(vertex_normals_),
+                                            &base_faces_(f, 0), w))
+              .transpose();
     }
   });
 

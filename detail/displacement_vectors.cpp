@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/errors.h"
+#include "core/mesh.h"
 #include "core/parallel.h"
 
 namespace msd {
@@ -17,14 +18,6 @@ constexpr double kMinTangentFraction = 1e-6;
 constexpr double kMinAreaFraction = 1e-14;
 // A vertex normal sum shorter than this fraction of its terms' total length has cancelled: no direction.
 constexpr double kMinNormalFraction = 1e-12;
-
-void check_finite(const Positions& X, const char* where, const char* what) {
-  if (X.allFinite()) return;
-  for (Eigen::Index v = 0; v < X.rows(); ++v)
-    if (!X.row(v).allFinite())
-      throw InvalidInput(std::string(where) + ": vertex " + std::to_string(v) + " of " + what +
-                         " has a non-finite coordinate");
-}
 
 }  // namespace
 

@@ -9,50 +9,20 @@
 
 #include "core/errors.h"
 #include "core/parallel.h"
+#include "detail/phong.h"
 
 namespace msd {
 namespace {
 
 // A base triangle below this fraction of the mean S-triangle area makes a degenerate prism.
 constexpr double kDegenerateBaseArea = 1e-10;
-// Matches NormalDisplacements: below this length the Phong normal has no direction and the face normal
-// stands in.
-constexpr double kMinNormalLength = 1e-12;
 // Tiny Tikhonov floor, relative to Ā², that keeps H positive definite when regularization = 0.
 constexpr double kDiagonalFloor = 1e-14;
 constexpr double kMaxDamping = 1e16;
 constexpr double kMinDamping = 1e-14;
 
-void check_finite(const Positions& X, const char* where, const char* what) {
-  if (X.allFinite()) return;
-  for (Eigen::Index v = 0; v < X.rows(); ++v)
-    if (!X.row(v).allFinite())
-      throw InvalidInput(std::string(where) + ": vertex " + std::to_string(v) + " of " + what +
-                         " has a non-finite coordinate");
-}
-
-void check_faces(const Faces& F, Eigen::Index num_vertices, const char* where, const char* what) {
-  if (F.rows() == 0) throw InvalidInput(std::string(where) + ": " + what + " has no face");
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k)
-      if (F(f, k) < 0 || F(f, k) >= num_vertices)
-        throw InvalidInput(std::string(where) + ": face " + std::to_string(f) + " of " + what +
-                           " has vertex index " + std::to_string(F(f, k)) + " out of range [0, " +
-                           std::to_string(num_vertices) + ")");
-}
-
 // The displacement direction of NormalDisplacements at barycentrics w of base face f: the normalised
 // Phong normal, else the unit face normal, else zero.
-Vec3 phong_direction(const Positions& X, const Positions& N, const Faces& F, int f, const Vec3& w) {
-  const Vec3 m = w[0] * Vec3(N.row(F(f, 0))) + w[1] * Vec3(N.row(F(f, 1))) + w[2] * Vec3(N.row(F(f, 2)));
-  const double len = m.norm();
-  if (len > kMinNormalLength) return m / len;
-  const Vec3 a = X.row(F(f, 0));
-  const Vec3 n = (Vec3(X.row(F(f, 1))) - a).cross(Vec3(X.row(F(f, 2))) - a);
-  const double n_len = n.norm();
-  return n_len > 0 ? Vec3(n / n_len) : Vec3::Zero();
-}
-
 // Volume of the blended prism with bottom a_k = b_k and top c_k = b_k + h_k n_k, and its gradient with
 // respect to (h0, h1, h2). See prism_volume() for the formula; ∂d_k/∂h_k = n_k, ∂f1 = n1 dh1 − n0 dh0,
 // ∂f2 = n2 dh2 − n0 dh0, ∂m = (∂f1 × (e2 + 2 f2) + (e1 + 2 f1) × ∂f2) / 6.
@@ -97,7 +67,8 @@ void DisplacementVolumes::base_frames(const Positions& B) {
   if (n_.rows() != ns) n_.resize(ns, 3);
   parallel_for_chunks(ns, [&](long begin, long end) {
     for (long i = begin; i < end; ++i)
-      n_.row(i) = phong_direction(B, vertex_normals_, base_faces_, face[i], bary.row(i));
+      n_.row(i) = phong::direction(phong::Columns(B), phong::Columns(vertex_normals_),
+                                   &base_faces_(face[i], 0), bary.row(i));
   });
 }
 
@@ -227,10 +198,12 @@ void DisplacementVolumes::encode(const Positions& S, const Faces& Fs, const Posi
   const auto& o = options_;
   auto bad = [](double x) { return !(x >= 0) || !std::isfinite(x); };
   if (o.max_iterations < 0 || bad(o.volume_tolerance) || bad(o.stationary_tolerance) ||
-      bad(o.regularization) || bad(o.damping) || bad(o.smoothness) || !(o.focal_fraction > 0) || !(o.max_height_change > 0))
+      bad(o.regularization) || bad(o.damping) || bad(o.smoothness) || !(o.focal_fraction > 0) ||
+      !(o.max_height_change > 0))
     throw InvalidInput(std::string(where) +
                        ": options need max_iterations >= 0, finite, non-negative volume_tolerance, "
-                       "stationary_tolerance, regularization, smoothness and damping, and focal_fraction, max_height_change > 0");
+                       "stationary_tolerance, regularization, smoothness and damping, and focal_fraction, "
+                       "max_height_change > 0");
   check_faces(Fs, S.rows(), where, "S");
   check_faces(Fb, B.rows(), where, "B");
   check_finite(S, where, "S");

@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "detail/closest_point.h"
+#include "detail/phong.h"
 
 namespace msd {
 namespace {
@@ -17,26 +18,6 @@ namespace {
 // Barycentric coordinates down to −kInsideSlack count as inside the triangle: a root on an edge may land a
 // rounding error outside it, and walking back and forth over the edge would gain nothing.
 constexpr double kInsideSlack = 1e-10;
-// Below this length the interpolated normal m = Σ w_k n_k has no usable direction (unit vertex normals
-// cancelling each other); the face normal stands in.
-constexpr double kMinNormalLength = 1e-12;
-
-void check_finite(const Positions& X, const char* where, const char* what) {
-  if (X.allFinite()) return;
-  for (Eigen::Index v = 0; v < X.rows(); ++v)
-    if (!X.row(v).allFinite())
-      throw InvalidInput(std::string(where) + ": vertex " + std::to_string(v) + " of " + what +
-                         " has a non-finite coordinate");
-}
-
-void check_faces(const Faces& F, Eigen::Index num_vertices, const char* where, const char* what) {
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k)
-      if (F(f, k) < 0 || F(f, k) >= num_vertices)
-        throw InvalidInput(std::string(where) + ": face " + std::to_string(f) + " of " + what +
-                           " has vertex index " + std::to_string(F(f, k)) + " out of range [0, " +
-                           std::to_string(num_vertices) + ")");
-}
 
 // adjacency[3 f + k] = the face across the edge of face f opposite its corner k, or −1 on a boundary
 // or non-manifold edge (where no single neighbour exists to walk to).
@@ -70,42 +51,6 @@ std::vector<int> face_adjacency(const Faces& F, int num_vertices) {
   return adjacency;
 }
 
-// Rows of a #V by 3 column-major array read straight from its three columns: the per-vertex loops stay
-// free of Eigen block temporaries and inline fully.
-struct Columns {
-  const double* x;
-  const double* y;
-  const double* z;
-  explicit Columns(const Eigen::MatrixX3d& X)
-      : x(X.data()), y(X.data() + X.rows()), z(X.data() + 2 * X.rows()) {}
-  Vec3 row(long i) const { return Vec3(x[i], y[i], z[i]); }
-};
-
-// Rows of a #V by 3 row-major array.
-struct Rows {
-  const double* p;
-  explicit Rows(const RowPositions& X) : p(X.data()) {}
-  Vec3 row(long i) const { return Vec3(p[3 * i], p[3 * i + 1], p[3 * i + 2]); }
-};
-
-template <class Points>
-inline Vec3 interpolate(const Points& X, const int* corners, const Vec3& w) {
-  return w[0] * X.row(corners[0]) + w[1] * X.row(corners[1]) + w[2] * X.row(corners[2]);
-}
-
-// The displacement direction at barycentrics w of a face: the Phong normal (seed 9.3.2), or the unit face
-// normal where the Phong normal vanishes, or zero on a zero-area face with no usable normal.
-template <class Normals>
-inline Vec3 displacement_direction(const Columns& X, const Normals& N, const int* corners, const Vec3& w) {
-  const Vec3 m = interpolate(N, corners, w);
-  const double len = m.norm();
-  if (len > kMinNormalLength) return m / len;
-  const Vec3 a = X.row(corners[0]);
-  const Vec3 n = (X.row(corners[1]) - a).cross(X.row(corners[2]) - a);
-  const double n_len = n.norm();
-  return n_len > 0 ? Vec3(n / n_len) : Vec3::Zero();
-}
-
 // Newton search for one vertex (see the class comment).
 struct BasePointSearch {
   const Positions& B;
@@ -128,7 +73,7 @@ struct BasePointSearch {
       const Vec3 m = w[0] * na + w[1] * nb + w[2] * nc;
       const Vec3 d = p - x;
       const double m_len = m.norm();
-      if (!(m_len > kMinNormalLength)) return false;
+      if (!(m_len > phong::kMinNormalLength)) return false;
       const Vec3 r = d.cross(m);
       if (w.minCoeff() >= -kInsideSlack && r.norm() <= tolerance * m_len) {
         face = f;
@@ -192,7 +137,7 @@ struct BasePointSearch {
       const Vec3 m = w[0] * na + w[1] * nb + w[2] * nc;
       const Vec3 d = p - x;
       const double m_len = m.norm();
-      if (!(m_len > kMinNormalLength)) return false;
+      if (!(m_len > phong::kMinNormalLength)) return false;
       const Vec3 r = d.cross(m);
       if (r.norm() <= tolerance * m_len) return true;
       const Vec3 ja = d.cross(na - nc) - (a - c).cross(m);
@@ -249,7 +194,7 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
       for (int k = 0; k < 3; ++k) star[fill[Fb(f, k)]++] = static_cast<int>(f);
   }
 
-  const Columns Bc(B), Nc(N);
+  const phong::Columns Bc(B), Nc(N);
   Eigen::VectorXi face(ns);
   Eigen::MatrixX3d barycentric(ns, 3);
   Eigen::VectorXd height(ns);
@@ -273,7 +218,7 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
               for (int j = star_offsets[v]; j < star_offsets[v + 1]; ++j) {
                 Vec3 wt;
                 if (!search.run_in_triangle(p, star[j], wt)) continue;
-                const double dist = (p - interpolate(Bc, &Fb(star[j], 0), wt)).squaredNorm();
+                const double dist = (p - phong::interpolate(Bc, &Fb(star[j], 0), wt)).squaredNorm();
                 if (dist < best) best = dist, f = star[j], w = wt, ok[i] = 1;
               }
             }
@@ -285,7 +230,7 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
           face[i] = f;
           barycentric.row(i) = w;
           const int* corners = &Fb(f, 0);
-          height[i] = (p - interpolate(Bc, corners, w)).dot(displacement_direction(Bc, Nc, corners, w));
+          height[i] = (p - phong::interpolate(Bc, corners, w)).dot(phong::direction(Bc, Nc, corners, w));
         }
       },
       512);
@@ -329,9 +274,9 @@ void NormalDisplacements::base_points(const Positions& B, Positions& out) const 
                      " vertices, the encoded base had " + std::to_string(num_base_vertices_));
   const long ns = static_cast<long>(face_.size());
   if (out.rows() != ns) out.resize(ns, 3);
-  const Columns Bc(B), W(barycentric_);
+  const phong::Columns Bc(B), W(barycentric_);
   parallel_for_chunks(ns, [&](long begin, long end) {
-    for (long i = begin; i < end; ++i) out.row(i) = interpolate(Bc, &base_faces_(face_[i], 0), W.row(i));
+    for (long i = begin; i < end; ++i) out.row(i) = phong::interpolate(Bc, &base_faces_(face_[i], 0), W.row(i));
   });
 }
 
@@ -344,8 +289,8 @@ void NormalDisplacements::reconstruct(const Positions& B_deformed, Positions& ou
   normals_.compute(B_deformed, normal_buffer_);
   const long ns = static_cast<long>(face_.size());
   if (out.rows() != ns) out.resize(ns, 3);
-  const Columns Bc(B_deformed);
-  const Rows Nc(normal_buffer_);
+  const phong::Columns Bc(B_deformed);
+  const phong::Rows Nc(normal_buffer_);
   double* const ox = out.data();
   double* const oy = ox + ns;
   double* const oz = oy + ns;
@@ -357,7 +302,7 @@ void NormalDisplacements::reconstruct(const Positions& B_deformed, Positions& ou
       const Sample& s = samples_[k];
       const int* corners = &base_faces_(s.face, 0);
       const Vec3 w(s.w[0], s.w[1], s.w[2]);
-      const Vec3 p = interpolate(Bc, corners, w) + s.h * displacement_direction(Bc, Nc, corners, w);
+      const Vec3 p = phong::interpolate(Bc, corners, w) + s.h * phong::direction(Bc, Nc, corners, w);
       ox[s.vertex] = p.x();
       oy[s.vertex] = p.y();
       oz[s.vertex] = p.z();

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/errors.h"
+#include "core/laplacian.h"
 #include "decomposition/remesh.h"
 #include "detail/closest_point.h"
 #include "detail/deformation_transfer.h"
@@ -39,6 +40,20 @@ Region transfer_region(const Positions& S, const Region& region, const Positions
   return Region::from_codes(std::move(codes));
 }
 
+// Fairing a large or tube-like free region can shrink it to (nearly) nothing; the shell operator on such
+// a base is singular. Say so in terms of the decomposition rather than let the solver fail.
+void check_base(const Mesh& mesh, const Positions& S, const Positions& B, const Faces& F) {
+  const Eigen::VectorXd rest = cotan_laplacian(S, F).mass, base = cotan_laplacian(B, F).mass;
+  for (auto v : mesh.vertices()) {
+    const int i = v.idx();
+    if (rest[i] > 0 && !(base[i] > 1e-6 * rest[i]))
+      throw TopologyError("multiscale: fairing the free region collapsed the base near vertex " + std::to_string(i) +
+                          " (its area fell to " + std::to_string(base[i] / rest[i]) +
+                          " of the input's): the free region is too large or tube-like for a faired base. Use a "
+                          "smaller free region, a lower fairing order, or the shell method directly");
+  }
+}
+
 }  // namespace
 
 MultiscaleDeformer::MultiscaleDeformer(MultiscaleOptions options)
@@ -56,6 +71,7 @@ void MultiscaleDeformer::do_prepare(const Mesh& mesh, const Region& region) {
   FairingOptions fairing;
   fairing.order = options_.fairing;
   base_ = fair_region(mesh, region, fairing);  // S → B
+  check_base(mesh, S, base_, F);
   base_faces_ = F;
   Region base_region = region;
   placed_.clear();

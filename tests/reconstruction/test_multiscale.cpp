@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include "core/errors.h"
+#include "core/mesh_io.h"
 #include "core/scenes.h"
 #include "decomposition/fairing.h"
 #include "detail/displacement_vectors.h"
@@ -170,4 +171,16 @@ TEST_CASE("multiscale: a remeshed base (CGAL isotropic remeshing) for normal, vo
   vectors.encoding = "vectors";
   vectors.remesh_base_edge_length = 0.02;
   CHECK_THROWS_WITH(MultiscaleDeformer(vectors), Contains("share connectivity"));
+}
+
+TEST_CASE("multiscale: a free region that fairs into a collapsed base is reported (CGAL's cactus)",
+          "[reconstruction][multiscale][real]") {
+  const Mesh cactus = load_mesh(test::cgal_mesh("cactus.off"));
+  const Region region = read_sel(test::cgal_deformation_data("cactus.sel"), static_cast<int>(cactus.n_vertices()));
+  MultiscaleDeformer ms;
+  CHECK_THROWS_AS(ms.prepare(cactus, region), TopologyError);
+  CHECK_THROWS_WITH(ms.prepare(cactus, region), Contains("collapsed the base") && Contains("shell method"));
+  ShellDeformer shell;  // the direct method handles the same edit
+  shell.prepare(cactus, region);
+  CHECK(shell.deform(read_def(test::cgal_deformation_data("cactus.def"))).allFinite());
 }

@@ -10,6 +10,7 @@
 #include "core/memory.h"
 #include "core/scenes.h"
 #include "reconstruction/multiscale.h"
+#include "reconstruction/subdivision_multiscale.h"
 
 namespace {
 using Clock = std::chrono::steady_clock;
@@ -49,6 +50,21 @@ int main(int argc, char** argv) {
                     frames[frames.size() / 2], frames.front());
         std::fflush(stdout);
       }
+      // The subdivision path: shell on the coarse mesh, stencil to full resolution, local-frame vectors.
+      msd::SubdivisionMultiscaleDeformer sub(scene.coarse_P, scene.coarse_F, scene.refinement);
+      auto t0 = Clock::now();
+      sub.prepare(mesh, scene.region);
+      const double prepare = ms_since(t0) / 1000;
+      msd::Positions out(scene.P.rows(), 3);
+      std::vector<double> frames;
+      for (int f = 0; f < 30; ++f) {
+        t0 = Clock::now();
+        sub.deform(scene.transforms, out);
+        frames.push_back(ms_since(t0));
+      }
+      std::sort(frames.begin(), frames.end());
+      std::printf("%10ld %9s %9s %11.2f %14.2f %14.2f\n", long(scene.P.rows()), name, "subdiv", prepare,
+                  frames[frames.size() / 2], frames.front());
     }
   return 0;
 }

@@ -7,6 +7,7 @@
 #include "detail/displacement_vectors.h"
 #include "detail/normal_displacements.h"
 #include "reconstruction/multiscale.h"
+#include "reconstruction/subdivision_multiscale.h"
 #include "test_util.h"
 
 using namespace msd;
@@ -183,4 +184,31 @@ TEST_CASE("multiscale: a free region that fairs into a collapsed base is reporte
   ShellDeformer shell;  // the direct method handles the same edit
   shell.prepare(cactus, region);
   CHECK(shell.deform(read_def(test::cgal_deformation_data("cactus.def"))).allFinite());
+}
+
+TEST_CASE("multiscale on a subdivision hierarchy: the edit runs on the coarse mesh", "[reconstruction][subdivision]") {
+  const Scene s = scene("lift");
+  const Mesh mesh = make_mesh(s.P, s.F);
+  const double diag = bounding_box_diagonal(s.P);
+  SubdivisionMultiscaleDeformer ms(s.coarse_P, s.coarse_F, s.refinement);
+  ms.prepare(mesh, s.region);
+  INFO("coarse mesh of " << s.coarse_P.rows() << " vertices");
+  CHECK(ms.coarse_region().num_handles() == 1);
+  CHECK((ms.deform({Mat4::Identity()}) - s.P).cwiseAbs().maxCoeff() <= 1e-9 * diag);
+  // The constraints live on the coarse mesh (here only its x = 1 column is handle), so fine handle
+  // vertices follow the lift on average, not exactly: the region's resolution is the coarse mesh's.
+  const Positions out = ms.deform(s.transforms);
+  CHECK(out.allFinite());
+  Vec3 mean = Vec3::Zero();
+  for (int v : s.region.handle_vertices(0)) mean += Vec3(out.row(v) - s.P.row(v));
+  mean /= double(s.region.handle_vertices(0).size());
+  const Vec3 lift = s.transforms[0].topRightCorner<3, 1>();
+  CHECK((mean - lift).norm() <= 0.15 * lift.norm());
+  // Likewise the fixed strip stays roughly in place: only its x = 0 control column is fixed.
+  double fixed_move = 0;
+  for (int v : s.region.fixed_vertices()) fixed_move = std::max(fixed_move, (out.row(v) - s.P.row(v)).norm());
+  CHECK(fixed_move <= 0.15 * lift.norm());
+  Scene other = s;
+  other.F.row(0).swap(other.F.row(1));
+  CHECK_THROWS_WITH(ms.prepare(make_mesh(other.P, other.F), s.region), Contains("not the Loop refinement"));
 }

@@ -7,16 +7,15 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "analysis/metrics.h"
 #include "analysis/render.h"
 #include "analysis/self_intersections.h"
 #include "core/scenes.h"
 
+using namespace msd::bench;
+
 namespace {
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 // Best of `repeats` runs, in milliseconds.
 template <class F>
@@ -32,9 +31,7 @@ double best_of(int repeats, F&& f) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<std::string> sizes;
-  for (int i = 1; i < argc; ++i) sizes.emplace_back(argv[i]);
-  if (sizes.empty()) sizes = {"100k"};
+  const std::vector<std::string> sizes = msd::bench::sizes(argc, argv, {"100k"});
   std::printf("%10s %12s %14s %14s %12s %12s %14s\n", "vertices", "render[ms]", "render 1spp[ms]",
               "self-int[ms]", "pairs", "rigidity[ms]", "detail dist[ms]");
   for (const auto& size : sizes) {

@@ -9,16 +9,15 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "core/scenes.h"
 #include "core/solver.h"
 #include "decomposition/fairing.h"
 #include "decomposition/subdivision_hierarchy.h"
 
+using namespace msd::bench;
+
 namespace {
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());

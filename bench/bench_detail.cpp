@@ -8,22 +8,17 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "core/mesh.h"
 #include "core/scenes.h"
 #include "detail/closest_point.h"
 #include "detail/normal_displacements.h"
 
-namespace {
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-}  // namespace
+using namespace msd::bench;
+
 
 int main(int argc, char** argv) {
-  std::vector<std::string> sizes;
-  for (int i = 1; i < argc; ++i) sizes.emplace_back(argv[i]);
-  if (sizes.empty()) sizes = {"100k", "1M"};
+  const std::vector<std::string> sizes = msd::bench::sizes(argc, argv, {"100k", "1M"});
   std::printf("%10s %10s %11s %10s %14s %14s %15s %9s\n", "vertices", "bvh[s]", "closest[s]", "encode[s]",
               "frame med[ms]", "frame min[ms]", "normals med[ms]", "fallback");
   for (const auto& size : sizes) {

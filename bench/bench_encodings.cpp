@@ -12,17 +12,16 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "core/scenes.h"
 #include "core/solver.h"
 #include "detail/deformation_transfer.h"
 #include "detail/displacement_volumes.h"
 #include "detail/normal_displacements.h"
 
+using namespace msd::bench;
+
 namespace {
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 constexpr double kPi = 3.14159265358979323846;
 

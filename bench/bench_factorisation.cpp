@@ -5,22 +5,18 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "core/memory.h"
 #include "core/laplacian.h"
 #include "core/scenes.h"
 #include "core/solver.h"
 
-namespace {
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
+using namespace msd::bench;
+
 
 int main(int argc, char** argv) {
   msd::retain_freed_memory();
-  std::vector<std::string> sizes;
-  for (int i = 1; i < argc; ++i) sizes.emplace_back(argv[i]);
-  if (sizes.empty()) sizes = {"10k", "100k", "1M"};
+  const std::vector<std::string> sizes = msd::bench::sizes(argc, argv, {"10k", "100k", "1M"});
   std::printf("backend: %s\n", msd::SparseSPDSolver::backend().c_str());
   std::printf("%10s %10s %10s %10s %11s %10s %10s %10s %12s\n", "vertices", "free", "cotan[s]", "bilap[s]",
               "restrict[s]", "factor[s]", "order[s]", "numeric[s]", "factor nnz");

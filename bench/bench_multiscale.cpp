@@ -7,21 +7,32 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "core/memory.h"
 #include "core/scenes.h"
 #include "reconstruction/multiscale.h"
 #include "reconstruction/subdivision_multiscale.h"
 
+using namespace msd::bench;
+
+
 namespace {
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+// Prepares the deformer on the scene, times 30 frames and prints a row.
+void run(msd::Deformer& deformer, const msd::Mesh& mesh, const msd::Scene& scene, const char* label) {
+  const auto t0 = Clock::now();
+  deformer.prepare(mesh, scene.region);
+  const double prepare = seconds_since(t0);
+  msd::Positions out(scene.P.rows(), 3);
+  const auto frames = time_frames(30, [&](int) { deformer.deform(scene.transforms, out); });
+  std::printf("%10ld %9s %9s %11.2f %14.2f %14.2f\n", long(scene.P.rows()), scene.name.c_str(), label, prepare,
+              frames[frames.size() / 2], frames.front());
+  std::fflush(stdout);
+}
 }  // namespace
 
 int main(int argc, char** argv) {
   msd::retain_freed_memory();
-  std::vector<std::string> sizes;
-  for (int i = 1; i < argc; ++i) sizes.emplace_back(argv[i]);
-  if (sizes.empty()) sizes = {"100k", "1M"};
+  const std::vector<std::string> sizes = msd::bench::sizes(argc, argv, {"100k", "1M"});
   std::printf("%10s %9s %9s %11s %14s %14s\n", "vertices", "scene", "encoding", "prepare[s]", "frame med[ms]",
               "frame min[ms]");
   for (const auto& size : sizes)
@@ -34,37 +45,11 @@ int main(int argc, char** argv) {
         msd::MultiscaleOptions o;
         o.encoding = encoding;
         msd::MultiscaleDeformer ms(o);
-        auto t0 = Clock::now();
-        ms.prepare(mesh, scene.region);
-        const double prepare = ms_since(t0) / 1000;
-        msd::Positions out(scene.P.rows(), 3);
-        std::vector<double> frames;
-        for (int f = 0; f < 30; ++f) {
-          msd::Mat4 T = scene.transforms[0];
-          t0 = Clock::now();
-          ms.deform({T}, out);
-          frames.push_back(ms_since(t0));
-        }
-        std::sort(frames.begin(), frames.end());
-        std::printf("%10ld %9s %9s %11.2f %14.2f %14.2f\n", long(scene.P.rows()), name, encoding, prepare,
-                    frames[frames.size() / 2], frames.front());
-        std::fflush(stdout);
+        run(ms, mesh, scene, encoding);
       }
       // The subdivision path: shell on the coarse mesh, stencil to full resolution, local-frame vectors.
       msd::SubdivisionMultiscaleDeformer sub(scene.coarse_P, scene.coarse_F, scene.refinement);
-      auto t0 = Clock::now();
-      sub.prepare(mesh, scene.region);
-      const double prepare = ms_since(t0) / 1000;
-      msd::Positions out(scene.P.rows(), 3);
-      std::vector<double> frames;
-      for (int f = 0; f < 30; ++f) {
-        t0 = Clock::now();
-        sub.deform(scene.transforms, out);
-        frames.push_back(ms_since(t0));
-      }
-      std::sort(frames.begin(), frames.end());
-      std::printf("%10ld %9s %9s %11.2f %14.2f %14.2f\n", long(scene.P.rows()), name, "subdiv", prepare,
-                  frames[frames.size() / 2], frames.front());
+      run(sub, mesh, scene, "subdiv");
     }
   return 0;
 }

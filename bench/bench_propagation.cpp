@@ -7,14 +7,14 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "core/scenes.h"
 #include "core/solver.h"
 #include "deformation/propagation.h"
 
+using namespace msd::bench;
+
 namespace {
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 const char* field_name(msd::PropagationField f) {
   switch (f) {
@@ -41,9 +41,7 @@ double frame_seconds(msd::TransformationPropagation& prop, const std::vector<msd
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<std::string> sizes;
-  for (int i = 1; i < argc; ++i) sizes.emplace_back(argv[i]);
-  if (sizes.empty()) sizes = {"100k", "1M"};
+  const std::vector<std::string> sizes = msd::bench::sizes(argc, argv, {"100k", "1M"});
   std::printf("backend: %s\n", msd::SparseSPDSolver::backend().c_str());
   std::printf("%10s %10s %10s %12s %14s %16s\n", "vertices", "free", "field", "prepare[s]", "frame Matrix[ms]",
               "frame Decomp.[ms]");

@@ -7,20 +7,17 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "core/memory.h"
 #include "core/scenes.h"
 #include "deformation/shell.h"
 
-namespace {
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-}  // namespace
+using namespace msd::bench;
+
 
 int main(int argc, char** argv) {
   msd::retain_freed_memory();
-  std::vector<std::string> sizes;
-  for (int i = 1; i < argc; ++i) sizes.emplace_back(argv[i]);
-  if (sizes.empty()) sizes = {"100k", "1M"};
+  const std::vector<std::string> sizes = msd::bench::sizes(argc, argv, {"100k", "1M"});
   std::printf("%10s %12s %14s %14s %14s\n", "vertices", "prepare[s]", "frame med[ms]", "frame min[ms]", "re-solve[ms]");
   for (const auto& size : sizes) {
     msd::SceneOptions options;
@@ -32,15 +29,12 @@ int main(int argc, char** argv) {
     shell.prepare(mesh, scene.region);
     const double prepare = ms_since(t0) / 1000;
     msd::Positions out(scene.P.rows(), 3);
-    std::vector<double> frames;
-    for (int f = 0; f < 60; ++f) {
-      msd::Mat4 T = scene.transforms[0];
-      T(2, 3) *= (f + 1) / 60.0;  // an animated lift
-      t0 = Clock::now();
-      shell.deform({T}, out);
-      frames.push_back(ms_since(t0));
-    }
-    std::sort(frames.begin(), frames.end());
+    std::vector<msd::Mat4> T = scene.transforms;
+    const double lift = T[0](2, 3);
+    const auto frames = time_frames(60, [&](int f) {
+      T[0](2, 3) = lift * (f + 1) / 60.0;  // an animated lift
+      shell.deform(T, out);
+    });
     t0 = Clock::now();
     shell.deform_by_solve(scene.transforms, out);
     const double solve = ms_since(t0);

@@ -1,0 +1,37 @@
+#pragma once
+// Timing and argument helpers shared by the benchmarks.
+
+#include <algorithm>
+#include <chrono>
+#include <string>
+#include <vector>
+
+namespace msd::bench {
+
+using Clock = std::chrono::steady_clock;
+
+inline double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+inline double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// The resolutions given on the command line (e.g. 100k 1M), or `defaults` when there are none.
+inline std::vector<std::string> sizes(int argc, char** argv, std::vector<std::string> defaults) {
+  std::vector<std::string> out(argv + 1, argv + argc);
+  return out.empty() ? defaults : out;
+}
+
+// Milliseconds of each of `frames` calls of frame(f), sorted (front = fastest, middle = median).
+template <class Frame>
+std::vector<double> time_frames(int frames, Frame&& frame) {
+  std::vector<double> ms;
+  for (int f = 0; f < frames; ++f) {
+    const auto t0 = Clock::now();
+    frame(f);
+    ms.push_back(ms_since(t0));
+  }
+  std::sort(ms.begin(), ms.end());
+  return ms;
+}
+
+}  // namespace msd::bench

@@ -9,6 +9,8 @@
 #include <random>
 #include <string>
 
+#include <catch2/catch.hpp>
+
 #include "core/mesh.h"
 
 namespace msd::test {
@@ -34,6 +36,17 @@ struct TempDir {
   }
   std::string file(const std::string& name) const { return (path / name).string(); }
 };
+
+//! Largest distance between corresponding rows of A and B (same shape required).
+inline double max_row_distance(const Positions& A, const Positions& B) {
+  REQUIRE(A.rows() == B.rows());
+  return (A - B).rowwise().norm().maxCoeff();
+}
+
+//! P (#V by 3) moved by x -> R x + t.
+inline Positions rigid_motion(const Positions& P, const Mat3& R, const Vec3& t) {
+  return (P * R.transpose()).rowwise() + t.transpose();
+}
 
 //! Unit icosahedron refined `levels` times by midpoint splits projected to the unit sphere.
 inline void icosphere(int levels, Positions& P, Faces& F) {

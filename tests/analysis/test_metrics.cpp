@@ -13,10 +13,6 @@ using Catch::Matchers::Contains;
 
 namespace {
 
-Positions rigid_motion(const Positions& P, const Mat3& R, const Vec3& t) {
-  return (P * R.transpose()).rowwise() + t.transpose();
-}
-
 Mat3 some_rotation() { return Eigen::AngleAxisd(1.1, Vec3(0.3, -1, 2).normalized()).toRotationMatrix(); }
 
 Scene small_plane(int resolution = 2000) {
@@ -99,14 +95,14 @@ TEST_CASE("rigidity error: zero for rigid motions, (s-1)^2 for a scaling, positi
     RigidityOptions options;
     options.weights = weights;
     const RigidityError rigid =
-        rigidity_error(P, rigid_motion(P, some_rotation(), Vec3(2, -1, 0.5)), F, options);
+        rigidity_error(P, test::rigid_motion(P, some_rotation(), Vec3(2, -1, 0.5)), F, options);
     REQUIRE(rigid.per_vertex.size() == P.rows());
     CHECK(rigid.stats.max <= 1e-10);
     CHECK(rigid.stats.count == P.rows());
 
     const double s = 1.3;
     const RigidityError scaled =
-        rigidity_error(P, rigid_motion(s * P, some_rotation(), Vec3::Zero()), F, options);
+        rigidity_error(P, test::rigid_motion(s * P, some_rotation(), Vec3::Zero()), F, options);
     CHECK(scaled.per_vertex.minCoeff() == Approx((s - 1) * (s - 1)).epsilon(1e-10));
     CHECK(scaled.per_vertex.maxCoeff() == Approx((s - 1) * (s - 1)).epsilon(1e-10));
 
@@ -158,7 +154,7 @@ TEST_CASE("volume: icosphere converges to 4/3 pi, scaling changes it by s^3 - 1"
   test::icosphere(3, P, F);
   for (double s : {0.5, 1.0, 1.7}) {
     const std::optional<double> change =
-        volume_change(P, rigid_motion(s * P, some_rotation(), Vec3(1, 2, 3)), F);
+        volume_change(P, test::rigid_motion(s * P, some_rotation(), Vec3(1, 2, 3)), F);
     REQUIRE(change);
     CHECK(*change == Approx(s * s * s - 1).margin(1e-12));
   }
@@ -222,7 +218,7 @@ TEST_CASE("detail distortion: zero for the input and for a rigid motion, 0.5 for
   CHECK(same.stats.count == static_cast<int>(s.region.free_vertices().size()));
 
   const DetailDistortion moved =
-      detail_distortion(s.P, rigid_motion(s.P, some_rotation(), Vec3(0.3, 0.2, -1)), s.F, s.region);
+      detail_distortion(s.P, test::rigid_motion(s.P, some_rotation(), Vec3(0.3, 0.2, -1)), s.F, s.region);
   CHECK(moved.stats.max <= 1e-8);
 
   // Bumps 1.5 times taller everywhere (also on the constrained strips the base is faired from). Not

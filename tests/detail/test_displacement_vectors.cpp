@@ -13,15 +13,6 @@ using Catch::Matchers::Contains;
 
 namespace {
 
-double max_row_distance(const Positions& A, const Positions& B) {
-  REQUIRE(A.rows() == B.rows());
-  return (A - B).rowwise().norm().maxCoeff();
-}
-
-Positions rigid_motion(const Positions& P, const Mat3& R, const Vec3& t) {
-  return (P * R.transpose()).rowwise() + t.transpose();
-}
-
 Mat3 some_rotation() { return Eigen::AngleAxisd(2.1, Vec3(0.3, 1, -0.7).normalized()).toRotationMatrix(); }
 
 // Max over vertices of the deviation of (n, t1, t2) from a right-handed orthonormal frame.
@@ -73,18 +64,18 @@ TEST_CASE("displacement vectors: B' = B and rigid motions reproduce S", "[detail
       dv.encode(s.P, s.F, s.smooth, s.F);
       Positions out;
       dv.reconstruct(s.smooth, out);
-      CHECK(max_row_distance(out, s.P) <= 1e-9 * diag);
+      CHECK(test::max_row_distance(out, s.P) <= 1e-9 * diag);
       const Vec3 t(-0.4, 2.0, 0.7);
-      dv.reconstruct(rigid_motion(s.smooth, Mat3::Identity(), t), out);
-      CHECK(max_row_distance(out, rigid_motion(s.P, Mat3::Identity(), t)) <= 1e-9 * diag);
+      dv.reconstruct(test::rigid_motion(s.smooth, Mat3::Identity(), t), out);
+      CHECK(test::max_row_distance(out, test::rigid_motion(s.P, Mat3::Identity(), t)) <= 1e-9 * diag);
     }
     DisplacementVectors local;
     local.encode(s.P, s.F, s.smooth, s.F);
     Positions out;
     const Mat3 R = some_rotation();
     const Vec3 t(1.5, -0.2, 0.3);
-    local.reconstruct(rigid_motion(s.smooth, R, t), out);
-    CHECK(max_row_distance(out, rigid_motion(s.P, R, t)) <= 1e-9 * diag);
+    local.reconstruct(test::rigid_motion(s.smooth, R, t), out);
+    CHECK(test::max_row_distance(out, test::rigid_motion(s.P, R, t)) <= 1e-9 * diag);
     // (9.8) on the flat base: the bumps are pure normal offsets, α = height, β = γ = 0.
     if (shape == SceneShape::Plane) {
       CHECK((local.coefficients().col(0) - s.heights).cwiseAbs().maxCoeff() <= 1e-15);
@@ -100,18 +91,18 @@ TEST_CASE("displacement vectors: Local details rotate with the base, Global ones
   const Scene s = make_surface(SceneShape::Plane, o);
   const Mat3 R = Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()).toRotationMatrix();  // the plane stands up
   const Vec3 t(0, 0, 1);
-  const Positions B_rotated = rigid_motion(s.smooth, R, t);
+  const Positions B_rotated = test::rigid_motion(s.smooth, R, t);
   DisplacementVectors local({DisplacementFrame::Local}), global({DisplacementFrame::Global});
   local.encode(s.P, s.F, s.smooth, s.F);
   global.encode(s.P, s.F, s.smooth, s.F);
   Positions out_local, out_global;
   local.reconstruct(B_rotated, out_local);
   global.reconstruct(B_rotated, out_global);
-  CHECK(max_row_distance(out_local, rigid_motion(s.P, R, t)) <= 1e-12);
+  CHECK(test::max_row_distance(out_local, test::rigid_motion(s.P, R, t)) <= 1e-12);
   // Global: every detail vector is the original world vector h = (0, 0, height), not rotated.
-  CHECK(max_row_distance(out_global, B_rotated + (s.P - s.smooth)) <= 1e-15);
+  CHECK(test::max_row_distance(out_global, B_rotated + (s.P - s.smooth)) <= 1e-15);
   // The two differ by |R h − h| = √2 · height at the bump tops.
-  CHECK(max_row_distance(out_local, out_global) ==
+  CHECK(test::max_row_distance(out_local, out_global) ==
         Approx(std::sqrt(2.0) * s.heights.maxCoeff()).epsilon(1e-12));
 }
 
@@ -139,7 +130,7 @@ TEST_CASE("displacement vectors: frames on degenerate first edges, needles and i
     }
     // The frame at vertex 0 still follows a rotation of the mesh (the same edge is chosen).
     const Mat3 R = some_rotation();
-    frames.compute(rigid_motion(P, R, Vec3(1, 2, 3)), N, T1, T2);
+    frames.compute(test::rigid_motion(P, R, Vec3(1, 2, 3)), N, T1, T2);
     CHECK((Vec3(N.row(0)) - R * Vec3::UnitZ()).norm() <= 1e-14);
     CHECK((Vec3(T1.row(0)) - R * Vec3::UnitX()).norm() <= 1e-14);
     // Encode/reconstruct: exact for B' = B; rigid for the vertices with a geometric frame.
@@ -148,13 +139,13 @@ TEST_CASE("displacement vectors: frames on degenerate first edges, needles and i
     dv.encode(S, F, P, F);
     Positions out;
     dv.reconstruct(P, out);
-    CHECK(max_row_distance(out, S) <= 1e-14);
-    dv.reconstruct(rigid_motion(P, R, Vec3(1, 2, 3)), out);
-    const Positions expected = rigid_motion(S, R, Vec3(1, 2, 3));
+    CHECK(test::max_row_distance(out, S) <= 1e-14);
+    dv.reconstruct(test::rigid_motion(P, R, Vec3(1, 2, 3)), out);
+    const Positions expected = test::rigid_motion(S, R, Vec3(1, 2, 3));
     for (int v : {0, 3, 4, 5, 6, 7, 8}) CHECK((out.row(v) - expected.row(v)).norm() <= 1e-14);
     // Vertices 1, 2 keep world-frame details: they translate with the base but do not rotate.
     for (int v : {1, 2})
-      CHECK((out.row(v) - (rigid_motion(P, R, Vec3(1, 2, 3)).row(v) + (S.row(v) - P.row(v)))).norm() <=
+      CHECK((out.row(v) - (test::rigid_motion(P, R, Vec3(1, 2, 3)).row(v) + (S.row(v) - P.row(v)))).norm() <=
             1e-14);
   }
   SECTION("a needle apex whose edges are all (nearly) parallel to the normal gets an orthogonal axis") {
@@ -177,7 +168,7 @@ TEST_CASE("displacement vectors: frames on degenerate first edges, needles and i
     dv.encode(S, F, P, F);
     Positions out;
     dv.reconstruct(P, out);
-    CHECK(max_row_distance(out, S) <= 1e-14);
+    CHECK(test::max_row_distance(out, S) <= 1e-14);
   }
   SECTION("frames of a whole scene are orthonormal and right-handed") {
     SceneOptions o;

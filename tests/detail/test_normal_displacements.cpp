@@ -14,22 +14,13 @@ using Catch::Matchers::Contains;
 
 namespace {
 
-double max_row_distance(const Positions& A, const Positions& B) {
-  REQUIRE(A.rows() == B.rows());
-  return (A - B).rowwise().norm().maxCoeff();
-}
-
-Positions rigid_motion(const Positions& P, const Mat3& R, const Vec3& t) {
-  return (P * R.transpose()).rowwise() + t.transpose();
-}
-
 Mat3 some_rotation() { return Eigen::AngleAxisd(0.9, Vec3(1, -2, 0.5).normalized()).toRotationMatrix(); }
 
 // Base B' = B must give back S; reports the error relative to the bounding-box diagonal.
 double identity_error(NormalDisplacements& nd, const Positions& S, const Positions& B) {
   Positions out;
   nd.reconstruct(B, out);
-  return max_row_distance(out, S) / bounding_box_diagonal(S);
+  return test::max_row_distance(out, S) / bounding_box_diagonal(S);
 }
 
 // Rigid motion of the base: S' must be the same rigid motion of S.
@@ -37,8 +28,8 @@ double rigid_error(NormalDisplacements& nd, const Positions& S, const Positions&
   const Mat3 R = some_rotation();
   const Vec3 t(0.3, -1.2, 2.5);
   Positions out;
-  nd.reconstruct(rigid_motion(B, R, t), out);
-  return max_row_distance(out, rigid_motion(S, R, t)) / bounding_box_diagonal(S);
+  nd.reconstruct(test::rigid_motion(B, R, t), out);
+  return test::max_row_distance(out, test::rigid_motion(S, R, t)) / bounding_box_diagonal(S);
 }
 
 // The bar's cylinder at a coarser level: linear refinement of the control mesh, vertices pushed radially
@@ -94,7 +85,7 @@ TEST_CASE("normal displacements: bumpy plane over its flat base gives the analyt
   CHECK((nd.heights() - s.heights).cwiseAbs().maxCoeff() <= 1e-12);
   Positions feet;
   nd.base_points(s.smooth, feet);
-  CHECK(max_row_distance(feet, s.smooth) <= 1e-12);
+  CHECK(test::max_row_distance(feet, s.smooth) <= 1e-12);
   CHECK(identity_error(nd, s.P, s.smooth) <= 1e-9);
   CHECK(rigid_error(nd, s.P, s.smooth) <= 1e-9);
 }
@@ -261,7 +252,7 @@ TEST_CASE("normal displacements: a base with different connectivity reproduces S
     CHECK((nd.heights() - s.heights).cwiseAbs().maxCoeff() <= 1e-12);
     Positions feet;
     nd.base_points(B, feet);
-    CHECK(max_row_distance(feet, s.smooth) <= 1e-12);
+    CHECK(test::max_row_distance(feet, s.smooth) <= 1e-12);
     CHECK(identity_error(nd, s.P, B) <= 1e-9);
     CHECK(rigid_error(nd, s.P, B) <= 1e-9);
   }
@@ -299,7 +290,7 @@ TEST_CASE("normal displacements: fallback to the closest point is reported and f
   nd.reconstruct(B, out);
   CHECK(out.allFinite());
   // The dropped tangential part is small here: the result stays near S.
-  CHECK(max_row_distance(out, S) <= 0.1);
+  CHECK(test::max_row_distance(out, S) <= 0.1);
 
   // With the default options everything converges and the reconstruction is exact.
   NormalDisplacements full;
@@ -351,8 +342,8 @@ TEST_CASE("normal displacements: reconstruct allocates nothing once out is sized
   nd.encode(s.P, s.F, s.smooth, s.F);
   Positions out(s.P.rows(), 3);
   const double* data = out.data();
-  nd.reconstruct(rigid_motion(s.smooth, some_rotation(), Vec3(1, 2, 3)), out);
+  nd.reconstruct(test::rigid_motion(s.smooth, some_rotation(), Vec3(1, 2, 3)), out);
   nd.reconstruct(s.smooth, out);
   CHECK(out.data() == data);
-  CHECK(max_row_distance(out, s.P) <= 1e-9 * bounding_box_diagonal(s.P));
+  CHECK(test::max_row_distance(out, s.P) <= 1e-9 * bounding_box_diagonal(s.P));
 }

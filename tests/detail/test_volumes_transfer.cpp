@@ -20,15 +20,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-double max_row_distance(const Positions& A, const Positions& B) {
-  REQUIRE(A.rows() == B.rows());
-  return (A - B).rowwise().norm().maxCoeff();
-}
-
-Positions rigid_motion(const Positions& P, const Mat3& R, const Vec3& t) {
-  return (P * R.transpose()).rowwise() + t.transpose();
-}
-
 Mat3 some_rotation() { return Eigen::AngleAxisd(1.3, Vec3(-0.4, 1, 0.6).normalized()).toRotationMatrix(); }
 
 using test::ArcBend;
@@ -99,12 +90,12 @@ TEST_CASE("volumes: B' = B and rigid motions of the base return S", "[detail][vo
     CHECK(dv.report().skipped_prisms == 0);
     Positions out;
     dv.reconstruct(s.smooth, out);
-    CHECK(max_row_distance(out, s.P) <= 1e-9 * diagonal);
+    CHECK(test::max_row_distance(out, s.P) <= 1e-9 * diagonal);
     CHECK(dv.report().iterations == 0);
     CHECK(dv.report().converged);
-    dv.reconstruct(rigid_motion(s.smooth, some_rotation(), Vec3(0.4, -2, 1)), out);
+    dv.reconstruct(test::rigid_motion(s.smooth, some_rotation(), Vec3(0.4, -2, 1)), out);
     INFO("rigid: max relative volume error " << dv.report().max_relative_error);
-    CHECK(max_row_distance(out, rigid_motion(s.P, some_rotation(), Vec3(0.4, -2, 1))) <= 1e-9 * diagonal);
+    CHECK(test::max_row_distance(out, test::rigid_motion(s.P, some_rotation(), Vec3(0.4, -2, 1))) <= 1e-9 * diagonal);
   }
   SECTION("base with other connectivity (one Loop level coarser)") {
     Positions B;
@@ -114,9 +105,9 @@ TEST_CASE("volumes: B' = B and rigid motions of the base return S", "[detail][vo
     dv.encode(s.P, s.F, B, Fb);
     Positions out;
     dv.reconstruct(B, out);
-    CHECK(max_row_distance(out, s.P) <= 1e-9 * diagonal);
-    dv.reconstruct(rigid_motion(B, some_rotation(), Vec3(1, 2, 3)), out);
-    CHECK(max_row_distance(out, rigid_motion(s.P, some_rotation(), Vec3(1, 2, 3))) <= 1e-9 * diagonal);
+    CHECK(test::max_row_distance(out, s.P) <= 1e-9 * diagonal);
+    dv.reconstruct(test::rigid_motion(B, some_rotation(), Vec3(1, 2, 3)), out);
+    CHECK(test::max_row_distance(out, test::rigid_motion(s.P, some_rotation(), Vec3(1, 2, 3))) <= 1e-9 * diagonal);
   }
 }
 
@@ -220,7 +211,7 @@ TEST_CASE("transfer: B' = B and rigid motions return S, same and other connectiv
   const double diagonal = bounding_box_diagonal(s.P);
   const Mat3 R = some_rotation();
   const Vec3 t(0.4, -2, 1);
-  const Positions moved = rigid_motion(s.P, R, t);
+  const Positions moved = test::rigid_motion(s.P, R, t);
   const std::vector<int> anchors = s.region.constrained_vertices();
 
   auto check_base = [&](const Positions& B, const Faces& Fb, const char* label) {
@@ -238,9 +229,9 @@ TEST_CASE("transfer: B' = B and rigid motions return S, same and other connectiv
     CHECK(dt.normal_displacements().report().fallback == 0);
     Positions out;
     dt.reconstruct(B, out);
-    CHECK(max_row_distance(out, s.P) <= 1e-9 * diagonal);
-    dt.reconstruct(rigid_motion(B, R, t), out);
-    CHECK(max_row_distance(out, moved) <= 1e-9 * diagonal);
+    CHECK(test::max_row_distance(out, s.P) <= 1e-9 * diagonal);
+    dt.reconstruct(test::rigid_motion(B, R, t), out);
+    CHECK(test::max_row_distance(out, moved) <= 1e-9 * diagonal);
     double anchor_error = 0;
     for (int a : anchors) anchor_error = std::max(anchor_error, (out.row(a) - moved.row(a)).norm());
     CHECK(anchor_error <= 1e-9 * diagonal);
@@ -249,8 +240,8 @@ TEST_CASE("transfer: B' = B and rigid motions return S, same and other connectiv
     DeformationTransfer free_dt;
     free_dt.encode(s.P, s.F, B, Fb);
     REQUIRE(free_dt.report().pinned_vertices == std::vector<int>{0});
-    free_dt.reconstruct(rigid_motion(B, R, t), out);
-    CHECK(max_row_distance(out, moved) <= 1e-9 * diagonal);
+    free_dt.reconstruct(test::rigid_motion(B, R, t), out);
+    CHECK(test::max_row_distance(out, moved) <= 1e-9 * diagonal);
   };
   check_base(s.smooth, s.F, "same connectivity");
   Positions B;
@@ -291,7 +282,7 @@ TEST_CASE("transfer: 120 degree bend, same and other base connectivity", "[detai
       anchor_error = std::max(anchor_error, (out.row(a) - targets.row(a)).norm());
       anchor_vs_exact = std::max(anchor_vs_exact, (out.row(a) - exact.row(a)).norm());
     }
-    const double deviation = max_row_distance(out, exact);
+    const double deviation = test::max_row_distance(out, exact);
     INFO((same ? "same" : "other") << " connectivity: anchor error " << anchor_error
                                    << " (vs the analytic bend " << anchor_vs_exact
                                    << "), max distance to the bent plate " << deviation << ", "
@@ -306,7 +297,7 @@ TEST_CASE("transfer: 120 degree bend, same and other base connectivity", "[detai
     results.push_back(out);
   }
   // The two bases differ only in how finely they sample the same bend.
-  const double between = max_row_distance(results[0], results[1]);
+  const double between = test::max_row_distance(results[0], results[1]);
   INFO("same vs other connectivity: " << between);
   CHECK(between <= 0.1 * s.bump_height);
 }
@@ -411,7 +402,7 @@ TEST_CASE("volumes and transfer: degenerate prisms and base triangles stay finit
   dt.encode(flat, s.F, flat, s.F);  // S = B with a degenerate triangle
   CHECK(dt.report().degenerate_base_faces >= 1);
   dt.reconstruct(flat, out);
-  CHECK(max_row_distance(out, flat) <= 1e-9);
+  CHECK(test::max_row_distance(out, flat) <= 1e-9);
   dt.reconstruct(bent, out);
   CHECK(out.allFinite());
 }
@@ -452,7 +443,7 @@ TEST_CASE("volumes and transfer: bad use and bad input", "[detail][volumes][tran
   CHECK_THROWS_AS(dt.reconstruct(S, out), UsageError);
   CHECK_THROWS_WITH(dt.reconstruct(nan_b, out), Contains("vertex 2"));
   dt.reconstruct(B, out);
-  CHECK(max_row_distance(out, S) <= 1e-9);
+  CHECK(test::max_row_distance(out, S) <= 1e-9);
 }
 
 TEST_CASE("volumes and transfer: reconstruct reuses out", "[detail][volumes][transfer]") {
@@ -470,6 +461,6 @@ TEST_CASE("volumes and transfer: reconstruct reuses out", "[detail][volumes][tra
     e->reconstruct(bent, out);
     e->reconstruct(s.smooth, out);
     CHECK(out.data() == data);
-    CHECK(max_row_distance(out, s.P) <= 1e-9 * bounding_box_diagonal(s.P));
+    CHECK(test::max_row_distance(out, s.P) <= 1e-9 * bounding_box_diagonal(s.P));
   }
 }

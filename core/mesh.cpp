@@ -172,6 +172,19 @@ Positions vertex_normals(const Positions& P, const Faces& F) {
   return N;
 }
 
+VertexFaces vertex_faces(const Faces& F, int num_vertices) {
+  VertexFaces out;
+  out.offsets.assign(num_vertices + 1, 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++out.offsets[F(f, k) + 1];
+  for (int v = 0; v < num_vertices; ++v) out.offsets[v + 1] += out.offsets[v];
+  out.faces.resize(out.offsets.back());
+  std::vector<int> fill(out.offsets.begin(), out.offsets.end() - 1);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) out.faces[fill[F(f, k)]++] = static_cast<int>(f);
+  return out;
+}
+
 void check_finite(const Positions& X, const char* who, const char* what) {
   if (X.allFinite()) return;
   for (Eigen::Index v = 0; v < X.rows(); ++v)

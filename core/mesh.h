@@ -55,6 +55,13 @@ class VertexNormals {
   std::vector<unsigned char> kind_;
 };
 
+//! The faces around each vertex: faces[offsets[v] .. offsets[v + 1]) are the rows of F containing v,
+//! in ascending order.
+struct VertexFaces {
+  std::vector<int> offsets, faces;
+};
+VertexFaces vertex_faces(const Faces& F, int num_vertices);
+
 //! \throw InvalidInput "<who>: vertex v of <what> has a non-finite coordinate" for the first such row of X.
 void check_finite(const Positions& X, const char* who, const char* what);
 //! \throw InvalidInput "<who>: face f of <what> has vertex index i out of range [0, n)" for the first such face.

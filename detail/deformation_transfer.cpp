@@ -36,18 +36,6 @@ Mat3 triangle_frame(const Vec3& a, const Vec3& b, const Vec3& c) {
 }
 
 // The displacement direction of NormalDisplacements at barycentrics w of base face f.
-// CSR lists of the faces around each vertex.
-void vertex_faces(const Faces& F, long num_vertices, std::vector<int>& offsets, std::vector<int>& faces) {
-  offsets.assign(num_vertices + 1, 0);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) ++offsets[F(f, k) + 1];
-  for (long v = 0; v < num_vertices; ++v) offsets[v + 1] += offsets[v];
-  faces.resize(offsets.back());
-  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) faces[fill[F(f, k)]++] = static_cast<int>(f);
-}
-
 int find_root(std::vector<int>& parent, int v) {
   while (parent[v] != v) v = parent[v] = parent[parent[v]];
   return v;
@@ -101,8 +89,8 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
     }
   });
   {
-    std::vector<int> offsets, around;
-    vertex_faces(Fb, nb, offsets, around);
+    const VertexFaces star = vertex_faces(Fb, static_cast<int>(nb));
+    const std::vector<int>&offsets = star.offsets, &around = star.faces;
     std::vector<int> queue;
     queue.reserve(nfb);
     for (long f = 0; f < nfb; ++f)
@@ -179,7 +167,11 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   triplets = std::vector<Triplet>();
 
   // Corners grouped by vertex, for a race-free per-vertex right-hand side.
-  vertex_faces(Fs, ns, corner_offsets_, corner_face_);
+  {
+    VertexFaces corners = vertex_faces(Fs, static_cast<int>(ns));
+    corner_offsets_ = std::move(corners.offsets);
+    corner_face_ = std::move(corners.faces);
+  }
   corner_q_.resize(corner_face_.size(), 3);
   for (long v = 0; v < ns; ++v)
     for (int c = corner_offsets_[v]; c < corner_offsets_[v + 1]; ++c) {
@@ -219,8 +211,8 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   for (int v : known)
     for (int k = 0; k < 3; ++k) needs_normal[Fb(normal_.base_faces()[v], k)] = 1;
   {
-    std::vector<int> offsets, around;
-    vertex_faces(Fb, nb, offsets, around);
+    const VertexFaces star = vertex_faces(Fb, static_cast<int>(nb));
+    const std::vector<int>&offsets = star.offsets, &around = star.faces;
     std::vector<char> face_needed(nfb, 0);
     normal_vertices_.clear();
     normal_offsets_.assign(1, 0);

@@ -29,16 +29,9 @@ VertexFrames::VertexFrames(const Faces& F, int num_vertices) {
                            std::to_string(F(f, k)) + " out of range [0, " + std::to_string(num_vertices) +
                            ")");
   F_ = F;
-  face_offsets_.assign(num_vertices + 1, 0);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) ++face_offsets_[F(f, k) + 1];
-  for (int v = 0; v < num_vertices; ++v) face_offsets_[v + 1] += face_offsets_[v];
-  incident_faces_.resize(face_offsets_.back());
-  {
-    std::vector<int> next(face_offsets_.begin(), face_offsets_.end() - 1);
-    for (Eigen::Index f = 0; f < F.rows(); ++f)
-      for (int k = 0; k < 3; ++k) incident_faces_[next[F(f, k)]++] = static_cast<int>(f);
-  }
+  VertexFaces star = vertex_faces(F, num_vertices);
+  face_offsets_ = std::move(star.offsets);
+  incident_faces_ = std::move(star.faces);
   face_normals_.resize(F.rows(), 3);
   // Every corner lists its two neighbours in winding order; faces are visited in index order.
   std::vector<int> offsets(num_vertices + 1, 0);

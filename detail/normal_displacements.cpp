@@ -21,15 +21,8 @@ constexpr double kInsideSlack = 1e-10;
 
 // adjacency[3 f + k] = the face across the edge of face f opposite its corner k, or −1 on a boundary
 // or non-manifold edge (where no single neighbour exists to walk to).
-std::vector<int> face_adjacency(const Faces& F, int num_vertices) {
-  std::vector<int> offsets(num_vertices + 1, 0);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) ++offsets[F(f, k) + 1];
-  for (int v = 0; v < num_vertices; ++v) offsets[v + 1] += offsets[v];
-  std::vector<int> incident(offsets.back());
-  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) incident[fill[F(f, k)]++] = static_cast<int>(f);
+std::vector<int> face_adjacency(const Faces& F, const VertexFaces& star) {
+  const std::vector<int>&offsets = star.offsets, &incident = star.faces;
 
   std::vector<int> adjacency(3 * F.rows(), -1);
   parallel_for_chunks(F.rows(), [&](long begin, long end) {
@@ -66,31 +59,16 @@ struct BasePointSearch {
     Vec3 w = w_io;
     iterations = walks = 0;
     for (;;) {
-      const int ia = F(f, 0), ib = F(f, 1), ic = F(f, 2);
-      const Vec3 a = B.row(ia), b = B.row(ib), c = B.row(ic);
-      const Vec3 na = N.row(ia), nb = N.row(ib), nc = N.row(ic);
-      const Vec3 x = w[0] * a + w[1] * b + w[2] * c;
-      const Vec3 m = w[0] * na + w[1] * nb + w[2] * nc;
-      const Vec3 d = p - x;
-      const double m_len = m.norm();
-      if (!(m_len > phong::kMinNormalLength)) return false;
-      const Vec3 r = d.cross(m);
-      if (w.minCoeff() >= -kInsideSlack && r.norm() <= tolerance * m_len) {
+      Vec3 step;
+      const Newton n = newton_step(p, f, w, w.minCoeff() >= -kInsideSlack, step);
+      if (n == Newton::Converged) {
         face = f;
         w_io = w;
         return true;
       }
+      if (n == Newton::Failed) return false;
       if (iterations - walks >= options.max_iterations) return false;
       ++iterations;
-      // Gauss–Newton on the 3×2 Jacobian of r(α, β) with γ = 1 − α − β: x_α = a − c, m_α = n_a − n_c.
-      const Vec3 ja = d.cross(na - nc) - (a - c).cross(m);
-      const Vec3 jb = d.cross(nb - nc) - (b - c).cross(m);
-      const double A = ja.squaredNorm(), Bc = ja.dot(jb), C = jb.squaredNorm();
-      const double det = A * C - Bc * Bc;
-      if (!(det > 1e-24 * A * C)) return false;  // rank-deficient: p sits near a focal point of B
-      const double ga = ja.dot(r), gb = jb.dot(r);
-      const double da = -(C * ga - Bc * gb) / det, db = -(A * gb - Bc * ga) / det;
-      const Vec3 step(da, db, -da - db);
       const Vec3 next = w + step;
       if (next.minCoeff() >= -kInsideSlack) {
         w = next;
@@ -128,32 +106,44 @@ struct BasePointSearch {
   // ping-pongs between triangles): projected Gauss–Newton confined to face f, started at its centre.
   // On success sets w and returns true.
   bool run_in_triangle(const Vec3& p, int f, Vec3& w) const {
-    const int ia = F(f, 0), ib = F(f, 1), ic = F(f, 2);
-    const Vec3 a = B.row(ia), b = B.row(ib), c = B.row(ic);
-    const Vec3 na = N.row(ia), nb = N.row(ib), nc = N.row(ic);
     w = Vec3::Constant(1.0 / 3.0);
     for (int it = 0; it <= options.max_iterations; ++it) {
-      const Vec3 x = w[0] * a + w[1] * b + w[2] * c;
-      const Vec3 m = w[0] * na + w[1] * nb + w[2] * nc;
-      const Vec3 d = p - x;
-      const double m_len = m.norm();
-      if (!(m_len > phong::kMinNormalLength)) return false;
-      const Vec3 r = d.cross(m);
-      if (r.norm() <= tolerance * m_len) return true;
-      const Vec3 ja = d.cross(na - nc) - (a - c).cross(m);
-      const Vec3 jb = d.cross(nb - nc) - (b - c).cross(m);
-      const double A = ja.squaredNorm(), Bc = ja.dot(jb), C = jb.squaredNorm();
-      const double det = A * C - Bc * Bc;
-      if (!(det > 1e-24 * A * C)) return false;
-      const double ga = ja.dot(r), gb = jb.dot(r);
-      const double da = -(C * ga - Bc * gb) / det, db = -(A * gb - Bc * ga) / det;
-      w += Vec3(da, db, -da - db);
+      Vec3 step;
+      const Newton n = newton_step(p, f, w, true, step);
+      if (n != Newton::Step) return n == Newton::Converged;
+      w += step;
       w = w.cwiseMax(0.0);  // project back onto the triangle
       const double sum = w.sum();
       if (!(sum > 0)) return false;
       w /= sum;
     }
     return false;
+  }
+
+  enum class Newton { Converged, Step, Failed };
+  // At barycentrics w of face f: Converged if may_stop and the residual of f = (p − x) × m meets the
+  // tolerance; Failed where the normal vanishes or the Jacobian is rank-deficient (p near a focal point
+  // of B); else Step, with the Gauss–Newton step on the 3×2 Jacobian of r(α, β), γ = 1 − α − β
+  // (x_α = a − c, m_α = n_a − n_c), written to step.
+  Newton newton_step(const Vec3& p, int f, const Vec3& w, bool may_stop, Vec3& step) const {
+    const int ia = F(f, 0), ib = F(f, 1), ic = F(f, 2);
+    const Vec3 a = B.row(ia), b = B.row(ib), c = B.row(ic);
+    const Vec3 na = N.row(ia), nb = N.row(ib), nc = N.row(ic);
+    const Vec3 m = w[0] * na + w[1] * nb + w[2] * nc;
+    const Vec3 d = p - (w[0] * a + w[1] * b + w[2] * c);
+    const double m_len = m.norm();
+    if (!(m_len > phong::kMinNormalLength)) return Newton::Failed;
+    const Vec3 r = d.cross(m);
+    if (may_stop && r.norm() <= tolerance * m_len) return Newton::Converged;
+    const Vec3 ja = d.cross(na - nc) - (a - c).cross(m);
+    const Vec3 jb = d.cross(nb - nc) - (b - c).cross(m);
+    const double A = ja.squaredNorm(), Bc = ja.dot(jb), C = jb.squaredNorm();
+    const double det = A * C - Bc * Bc;
+    if (!(det > 1e-24 * A * C)) return Newton::Failed;
+    const double ga = ja.dot(r), gb = jb.dot(r);
+    const double da = -(C * ga - Bc * gb) / det, db = -(A * gb - Bc * ga) / det;
+    step = Vec3(da, db, -da - db);
+    return Newton::Step;
   }
 };
 
@@ -179,20 +169,10 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
   VertexNormals normals(Fb, nb);
   Positions N;
   normals.compute(B, N);
-  const std::vector<int> adjacency = face_adjacency(Fb, nb);
+  const VertexFaces star = vertex_faces(Fb, nb);  // for walking, and for the second-chance search
+  const std::vector<int> adjacency = face_adjacency(Fb, star);
   const ClosestPointQuery closest(B, Fb);
   const BasePointSearch search{B, N, Fb, adjacency, options_, options_.tolerance * bounding_box_diagonal(B)};
-  // Faces around each base vertex, for the second-chance search.
-  std::vector<int> star_offsets(nb + 1, 0), star;
-  for (Eigen::Index f = 0; f < Fb.rows(); ++f)
-    for (int k = 0; k < 3; ++k) ++star_offsets[Fb(f, k) + 1];
-  for (int v = 0; v < nb; ++v) star_offsets[v + 1] += star_offsets[v];
-  star.resize(star_offsets.back());
-  {
-    std::vector<int> fill(star_offsets.begin(), star_offsets.end() - 1);
-    for (Eigen::Index f = 0; f < Fb.rows(); ++f)
-      for (int k = 0; k < 3; ++k) star[fill[Fb(f, k)]++] = static_cast<int>(f);
-  }
 
   const phong::Columns Bc(B), Nc(N);
   Eigen::VectorXi face(ns);
@@ -215,11 +195,11 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
             double best = std::numeric_limits<double>::infinity();
             for (int k = 0; k < 3; ++k) {
               const int v = Fb(start.face, k);
-              for (int j = star_offsets[v]; j < star_offsets[v + 1]; ++j) {
+              for (int j = star.offsets[v]; j < star.offsets[v + 1]; ++j) {
                 Vec3 wt;
-                if (!search.run_in_triangle(p, star[j], wt)) continue;
-                const double dist = (p - phong::interpolate(Bc, &Fb(star[j], 0), wt)).squaredNorm();
-                if (dist < best) best = dist, f = star[j], w = wt, ok[i] = 1;
+                if (!search.run_in_triangle(p, star.faces[j], wt)) continue;
+                const double dist = (p - phong::interpolate(Bc, &Fb(star.faces[j], 0), wt)).squaredNorm();
+                if (dist < best) best = dist, f = star.faces[j], w = wt, ok[i] = 1;
               }
             }
           }

@@ -9,25 +9,40 @@
 namespace msd {
 namespace {
 
-constexpr double kDegenerateAreaRatio = 1e-14;
-
 struct Corner {
   Vec3 p[3];
   double area2;  // twice the area
   bool degenerate;
 };
 
+bool degenerate_triangle(const Vec3 (&p)[3], double area2) {
+  const double longest2 =
+      std::max({(p[1] - p[0]).squaredNorm(), (p[2] - p[1]).squaredNorm(), (p[0] - p[2]).squaredNorm()});
+  return !(area2 > 2 * TriangleCotangents::kDegenerateAreaRatio * longest2);  // also catches NaN
+}
+
 Corner corner(const Positions& P, const Faces& F, Eigen::Index f) {
   Corner c;
   for (int k = 0; k < 3; ++k) c.p[k] = P.row(F(f, k));
   c.area2 = (c.p[1] - c.p[0]).cross(c.p[2] - c.p[0]).norm();
-  const double longest2 = std::max({(c.p[1] - c.p[0]).squaredNorm(), (c.p[2] - c.p[1]).squaredNorm(),
-                                    (c.p[0] - c.p[2]).squaredNorm()});
-  c.degenerate = !(c.area2 > 2 * kDegenerateAreaRatio * longest2);  // also catches NaN
+  c.degenerate = degenerate_triangle(c.p, c.area2);
   return c;
 }
 
 }  // namespace
+
+TriangleCotangents triangle_cotangents(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+  const Vec3 p[3] = {p0, p1, p2};
+  TriangleCotangents t;
+  t.area2 = (p[1] - p[0]).cross(p[2] - p[0]).norm();
+  t.degenerate = degenerate_triangle(p, t.area2);
+  if (t.degenerate) return t;
+  for (int k = 0; k < 3; ++k) {
+    t.cot[k] = (p[(k + 1) % 3] - p[k]).dot(p[(k + 2) % 3] - p[k]) / t.area2;
+    if (std::abs(t.cot[k]) > CotanLaplacian::kMaxCotangent) ++t.needle_corners;
+  }
+  return t;
+}
 
 CotanLaplacian cotan_laplacian(const Positions& P, const Faces& F) {
   const int nv = static_cast<int>(P.rows());
@@ -37,14 +52,14 @@ CotanLaplacian cotan_laplacian(const Positions& P, const Faces& F) {
   triplets.reserve(F.rows() * 9);
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const Corner c = corner(P, F, f);
-    if (c.degenerate) {
+    const TriangleCotangents t = triangle_cotangents(c.p[0], c.p[1], c.p[2]);
+    if (t.degenerate) {
       ++out.degenerate_faces;
       continue;
     }
     double cot[3];
     for (int k = 0; k < 3; ++k) {
-      const Vec3 a = c.p[(k + 1) % 3] - c.p[k], b = c.p[(k + 2) % 3] - c.p[k];
-      cot[k] = a.dot(b) / c.area2;
+      cot[k] = t.cot[k];
       if (std::abs(cot[k]) > CotanLaplacian::kMaxCotangent) {
         cot[k] = std::copysign(CotanLaplacian::kMaxCotangent, cot[k]);
         ++out.clamped_cotangents;

@@ -19,6 +19,22 @@ struct CotanLaplacian {
   static constexpr double kMaxCotangent = 1e5;
 };
 
+//! The face rule of cotan_laplacian(), for code that assembles its own cotangent-weighted operators
+//! (deformation transfer) and must treat degenerate and needle triangles the same way.
+struct TriangleCotangents {
+  double area2 = 0;           //!< twice the area, ‖(p1 − p0) × (p2 − p0)‖
+  double cot[3] = {0, 0, 0};  //!< cotangent of the angle at corner k (opposite the edge k+1, k+2), unclamped
+  //! Twice the area at most 2 · kDegenerateAreaRatio · (longest edge)², or not a number: cotan_laplacian()
+  //! leaves the face out (cot stays 0).
+  bool degenerate = false;
+  //! Corners with |cot| > CotanLaplacian::kMaxCotangent (cotan_laplacian() clamps them): a needle.
+  int needle_corners = 0;
+  static constexpr double kDegenerateAreaRatio = 1e-14;
+};
+
+//! Classifies the triangle (p0, p1, p2) exactly as cotan_laplacian() does; scale-invariant (a ratio test).
+TriangleCotangents triangle_cotangents(const Vec3& p0, const Vec3& p1, const Vec3& p2);
+
 //! Cotan weights and mixed-Voronoi mass of (P #V×3, F #F×3). A face whose area is below 1e-14 times its
 //! squared longest edge counts as degenerate and contributes nothing; cotangents are clamped, so the
 //! result is always finite.

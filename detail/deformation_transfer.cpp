@@ -1,27 +1,55 @@
 #include "detail/deformation_transfer.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <limits>
+#include <mutex>
 #include <numeric>
 #include <string>
 
 #include "core/errors.h"
+#include "core/laplacian.h"
 #include "core/parallel.h"
 #include "detail/phong.h"
 
 namespace msd {
 namespace {
 
-// Same degeneracy test as cotan_laplacian(): twice the area at most 2e-14 times the longest edge squared.
-constexpr double kDegenerateAreaRatio = 1e-14;
-
 using RowMat3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
 
-bool degenerate(const Vec3& e1, const Vec3& e2, const Vec3& n) {
-  const double longest2 = std::max({e1.squaredNorm(), e2.squaredNorm(), (e2 - e1).squaredNorm()});
-  return !(n.norm() > 2 * kDegenerateAreaRatio * longest2);  // also catches NaN
+// A vertex of S' farther than this many times (diagonal of the deformed base and anchors + diagonal of
+// S ∪ B) outside the deformed base's bounding box is not a transferred detail but a blown-up solve.
+// Legitimate results stay within about one detail size of B'; 2 leaves room for stretching edits.
+constexpr double kResultBound = 2;
+
+// The box of a point set, grown by other points.
+struct Box {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+  Vec3 hi = -lo;
+  void add(const Vec3& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  void add(const Positions& P) {
+    if (P.rows() == 0) return;
+    lo = lo.cwiseMin(P.colwise().minCoeff().transpose());
+    hi = hi.cwiseMax(P.colwise().maxCoeff().transpose());
+  }
+  // Norms that do not overflow for coordinates near DBL_MAX (a finite B' can have them).
+  double diagonal() const { return (hi - lo).stableNorm(); }
+  double distance(const Vec3& p) const {
+    const Vec3 outside = p - p.cwiseMax(lo).cwiseMin(hi);
+    const double d = outside.norm();
+    return std::isfinite(d) ? d : outside.stableNorm();
+  }
+};
+
+std::string format_point(const Vec3& p) {
+  char text[96];
+  std::snprintf(text, sizeof text, "(%.6g, %.6g, %.6g)", p.x(), p.y(), p.z());
+  return text;
 }
 
 // Sumner & Popović's frame [e1, e2, n / √‖n‖] of a triangle (columns); a zero normal gives a zero column.
@@ -35,7 +63,6 @@ Mat3 triangle_frame(const Vec3& a, const Vec3& b, const Vec3& c) {
   return V;
 }
 
-// The displacement direction of NormalDisplacements at barycentrics w of base face f.
 int find_root(std::vector<int>& parent, int v) {
   while (parent[v] != v) v = parent[v] = parent[parent[v]];
   return v;
@@ -73,21 +100,29 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   base_faces_ = Fb;
   num_base_vertices_ = static_cast<int>(nb);
 
-  // Frames of the base triangles; degenerate ones borrow from the nearest usable face (multi-source
-  // breadth-first search over faces sharing a vertex).
+  // Frames of the base triangles. A triangle that cotan_laplacian() leaves out (degenerate) or clamps (a
+  // needle: some |cot| > kMaxCotangent) has a frame whose inverse amplifies the rounding of B' by up to
+  // its cotangent (and, for the normal column, by 1/√area): it gets no frame of its own and borrows the
+  // gradient of the nearest usable face (multi-source breadth-first search over faces sharing a vertex).
   frame_inverse_.resize(nfb, 9);
   frame_face_.setConstant(nfb, -1);
-  std::vector<char> usable(nfb, 0);
+  std::vector<char> usable(nfb, 0), base_degenerate(nfb, 0);
   parallel_for_chunks(nfb, [&](long begin, long end) {
     for (long f = begin; f < end; ++f) {
       const Vec3 a = B.row(Fb(f, 0)), b = B.row(Fb(f, 1)), c = B.row(Fb(f, 2));
-      if (degenerate(b - a, c - a, (b - a).cross(c - a))) continue;
+      const TriangleCotangents shape = triangle_cotangents(a, b, c);
+      base_degenerate[f] = shape.degenerate;
+      if (shape.degenerate || shape.needle_corners > 0) continue;
       const RowMat3 inverse = triangle_frame(a, b, c).inverse();
       if (!inverse.allFinite()) continue;
       frame_inverse_.row(f) = Eigen::Map<const Eigen::Matrix<double, 1, 9>>(inverse.data());
       usable[f] = 1;
     }
   });
+  for (long f = 0; f < nfb; ++f) {
+    report.degenerate_base_faces += base_degenerate[f];
+    report.needle_base_faces += !usable[f] && !base_degenerate[f];
+  }
   {
     const VertexFaces star = vertex_faces(Fb, static_cast<int>(nb));
     const std::vector<int>&offsets = star.offsets, &around = star.faces;
@@ -98,8 +133,7 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
         frame_face_[f] = static_cast<int>(f);
         queue.push_back(static_cast<int>(f));
       }
-    report.degenerate_base_faces = static_cast<int>(nfb - static_cast<long>(queue.size()));
-    for (size_t q = 0; q < queue.size() && report.degenerate_base_faces > 0; ++q) {
+    for (size_t q = 0; q < queue.size() && static_cast<long>(queue.size()) < nfb; ++q) {
       const int f = queue[q];
       for (int k = 0; k < 3; ++k) {
         const int v = Fb(f, k);
@@ -130,11 +164,15 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
     if (source_face_[t] < 0) ++report.unreachable_faces;
   }
 
-  // Per-face gradients of S's hat functions: the Poisson matrix Q = Σ_t A_t ∇φ_a·∇φ_b (= −W, the cotan
-  // weights without their clamp) and the corner vectors q_{t,k} = −A_t Σ_m s_m (∇φ_m·∇φ_k), both from the
-  // same numbers so that G = identity gives back S exactly.
+  // The Poisson matrix Q = Σ_t Q_t and the per-corner vectors (Q_t S)_k, with Q_t = A_t ∇φ_a·∇φ_b = −W_t the
+  // cotan weights of S's triangle t under cotan_laplacian()'s rule: degenerate triangles are left out
+  // (their energy is 0 whatever x does), and a needle's cotangents are bounded by kMaxCotangent. The bound
+  // scales all three cotangents of the face together (its weight in the energy, not its shape): clamping
+  // them one by one, as cotan_laplacian() does, makes a needle with two tiny angles indefinite (cot sums
+  // (c, c, −c) instead of cot α cot β + cot β cot γ + cot γ cot α = 1), and Q would no longer factor.
+  // (Q_t S)_k = Σ_m w_km (s_k − s_m) uses edge vectors only, so it does not depend on where S sits.
   std::vector<Triplet> triplets;
-  triplets.reserve(9 * nfs);
+  triplets.reserve(12 * nfs);
   using FaceBlocks = Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor>;
   FaceBlocks face_q = FaceBlocks::Zero(nfs, 9);
   std::vector<int> parent(ns);
@@ -142,21 +180,29 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   for (long t = 0; t < nfs; ++t) {
     Vec3 p[3];
     for (int k = 0; k < 3; ++k) p[k] = S.row(Fs(t, k));
-    const Vec3 n = (p[1] - p[0]).cross(p[2] - p[0]);
-    if (degenerate(p[1] - p[0], p[2] - p[0], n)) continue;
-    const double area2 = n.norm(), area = area2 / 2;
-    const Vec3 unit = n / area2;
-    Vec3 g[3];
-    for (int k = 0; k < 3; ++k) g[k] = unit.cross(p[(k + 2) % 3] - p[(k + 1) % 3]) / area2;
-    for (int k = 0; k < 3; ++k) {
-      Vec3 q = Vec3::Zero();
-      for (int m = 0; m < 3; ++m) {
-        const double w = area * g[k].dot(g[m]);
-        triplets.emplace_back(Fs(t, k), Fs(t, m), w);
-        q -= w * p[m];
-      }
-      face_q.block<1, 3>(t, 3 * k) = q.transpose();
+    const TriangleCotangents shape = triangle_cotangents(p[0], p[1], p[2]);
+    if (shape.degenerate) {
+      ++report.degenerate_faces;
+      continue;
     }
+    report.clamped_cotangents += shape.needle_corners;
+    const double largest = std::max({std::abs(shape.cot[0]), std::abs(shape.cot[1]), std::abs(shape.cot[2])});
+    const double scale =
+        largest > CotanLaplacian::kMaxCotangent ? CotanLaplacian::kMaxCotangent / largest : 1.0;
+    Vec3 q[3] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+    for (int k = 0; k < 3; ++k) {
+      // The angle at corner k weighs the opposite edge (i, j).
+      const int a = (k + 1) % 3, b = (k + 2) % 3, i = Fs(t, a), j = Fs(t, b);
+      const double w = 0.5 * scale * shape.cot[k];
+      triplets.emplace_back(i, j, -w);
+      triplets.emplace_back(j, i, -w);
+      triplets.emplace_back(i, i, w);
+      triplets.emplace_back(j, j, w);
+      const Vec3 edge = p[a] - p[b];
+      q[a] += w * edge;
+      q[b] -= w * edge;
+    }
+    for (int k = 0; k < 3; ++k) face_q.block<1, 3>(t, 3 * k) = q[k].transpose();
     for (int k = 1; k < 3; ++k) {
       const int a = find_root(parent, Fs(t, 0)), b = find_root(parent, Fs(t, k));
       if (a != b) parent[std::max(a, b)] = std::min(a, b);
@@ -236,6 +282,10 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   gradient_.setZero(nfb, 9);
   rhs_.resize(system_.unknown().size(), 3);
   known_values_.resize(known.size(), 3);
+  Box rest;
+  rest.add(S);
+  rest.add(B);
+  rest_extent_ = rest.diagonal();
   report.factor_seconds = seconds_since(t0);
   report_ = std::move(report);
   encoded_ = true;
@@ -262,7 +312,7 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
     }
   });
 
-  // Reduced right-hand side Q_uu x_u = −(f_u + Q_uk x_k), f_i = Σ G_t q_{t,k} over the corners at vertex i.
+  // Reduced right-hand side Q_uu x_u = f_u − Q_uk x_k, f_i = Σ G_t (Q_t S)_k over the corners at vertex i.
   const std::vector<int>& unknown = system_.unknown();
   parallel_for_chunks(static_cast<long>(unknown.size()), [&](long begin, long end) {
     for (long r = begin; r < end; ++r) {
@@ -276,7 +326,7 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
         else
           sum += q;
       }
-      rhs_.row(r) = -sum.transpose();
+      rhs_.row(r) = sum.transpose();
     }
   });
 
@@ -317,20 +367,78 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
     }
   });
 
+  // Solve for x − c with c the first Dirichlet value: Q's rows sum to zero, so the shift changes only the
+  // known values, and the solve's rounding is relative to the size of S' rather than to its distance from
+  // the origin.
+  const Eigen::RowVector3d centre =
+      known_values_.rows() > 0 ? Eigen::RowVector3d(known_values_.row(0)) : Eigen::RowVector3d::Zero();
+  known_values_.rowwise() -= centre;
   if (!unknown.empty()) {
     rhs_.noalias() -= system_.coupling() * known_values_;
     system_.solver().solve(rhs_, solution_);
   }
   const long ns = static_cast<long>(unknown.size() + known.size());
   if (out.rows() != ns) out.resize(ns, 3);
-  std::atomic<bool> finite{true};
   parallel_for_chunks(static_cast<long>(unknown.size()), [&](long begin, long end) {
-    for (long r = begin; r < end; ++r) out.row(unknown[r]) = solution_.row(r);
-    if (!solution_.middleRows(begin, end - begin).allFinite()) finite = false;
+    for (long r = begin; r < end; ++r) out.row(unknown[r]) = solution_.row(r) + centre;
   });
-  for (size_t k = 0; k < known.size(); ++k) out.row(known[k]) = known_values_.row(k);
-  if (!finite) throw InvalidInput(std::string(where) + ": non-finite result from a finite base (overflow?)");
+  for (size_t k = 0; k < known.size(); ++k) out.row(known[k]) = known_values_.row(k) + centre;
+  check_result(B_deformed, out);
   report_.seconds = seconds_since(t0);
+}
+
+void DeformationTransfer::check_result(const Positions& B_deformed, const Positions& out) const {
+  Box box;
+  box.add(B_deformed);
+  for (int v : system_.known()) box.add(Vec3(out.row(v)));
+  const double limit = kResultBound * (box.diagonal() + rest_extent_);
+  // The worst vertex: not finite, else the farthest outside the box (lowest index on ties).
+  std::mutex mutex;
+  long worst = -1;
+  double worst_distance = 0;
+  parallel_for_chunks(static_cast<long>(out.rows()), [&](long begin, long end) {
+    long chunk_worst = -1;
+    double chunk_distance = 0;
+    for (long i = begin; i < end; ++i) {
+      const Vec3 p = out.row(i);
+      const bool finite = p.allFinite();
+      const double d = finite ? box.distance(p) : std::numeric_limits<double>::infinity();
+      if ((!finite || d > limit) && (chunk_worst < 0 || d > chunk_distance)) {
+        chunk_worst = i;
+        chunk_distance = d;
+      }
+    }
+    if (chunk_worst < 0) return;
+    std::lock_guard<std::mutex> lock(mutex);
+    if (worst < 0 || chunk_distance > worst_distance ||
+        (chunk_distance == worst_distance && chunk_worst < worst)) {
+      worst = chunk_worst;
+      worst_distance = chunk_distance;
+    }
+  });
+  if (worst < 0) return;
+  const Vec3 p = out.row(worst);
+  std::string cause;
+  if (!p.allFinite()) {
+    cause = "is not finite (the Poisson solve overflowed)";
+  } else {
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  " is %.3g outside the bounding box of the deformed base and anchors (bound %.3g = %g x "
+                  "(their diagonal %.3g + the diagonal of S and B %.3g))",
+                  worst_distance, limit, kResultBound, box.diagonal(), rest_extent_);
+    cause = "at " + format_point(p) + text;
+  }
+  const Report& r = report_;
+  throw SolverError(
+      "DeformationTransfer::reconstruct: vertex " + std::to_string(worst) + " of S' " + cause +
+          ": the transferred gradients are unbounded, e.g. a base triangle turned inside out or nearly "
+          "flat in B' (B: " +
+          std::to_string(r.needle_base_faces) + " needle and " + std::to_string(r.degenerate_base_faces) +
+          " degenerate triangles without a frame; S: " + std::to_string(r.degenerate_faces) +
+          " degenerate triangles, " + std::to_string(r.clamped_cotangents) +
+          " clamped cotangents). No result returned",
+      worst);
 }
 
 }  // namespace msd

@@ -19,8 +19,11 @@ namespace msd {
 //! Deformation gradients (Sumner & Popović 2004, eqs. 1–4): a base triangle (b1, b2, b3) gets the frame
 //! V = [b2 − b1, b3 − b1, n / √‖n‖] with n = (b2 − b1) × (b3 − b1) (the fourth, normal-offset vertex
 //! b4 = b1 + n / √‖n‖ scales like an edge), and the gradient of B → B' on it is G = V' V⁻¹. V⁻¹ is
-//! computed once in encode(). A base triangle of (near) zero area has no frame: it borrows the gradient
-//! of the nearest usable base triangle (breadth first over shared vertices); see report().
+//! computed once in encode(). A base triangle that cotan_laplacian() would leave out (degenerate) or clamp
+//! (a needle: some |cot| > CotanLaplacian::kMaxCotangent; the rule is triangle_cotangents()) has no frame:
+//! its V⁻¹ would amplify the rounding of B' by up to its cotangent, far from the origin into garbage. It
+//! borrows the gradient of the nearest usable base triangle (breadth first over shared vertices); see
+//! report(). Both tests are ratios, so the choice does not depend on the scale of B.
 //!
 //! Triangle correspondence S → B: with identical connectivity (#Vs = #Vb and Fs = Fb) triangle t of S
 //! takes the gradient of triangle t of B. Otherwise the centroid of each triangle of S is projected
@@ -30,30 +33,45 @@ namespace msd {
 //! Reconstruction (seed Fig. 9.10 form; Botsch et al. 2006 eq. 5): minimise over the positions x of S'
 //!   Σ_t A_t ‖∇x|_t − G_t ∇s|_t‖²
 //! with A_t, ∇ the areas and piecewise-linear gradient of S. Its normal equations are the Poisson system
-//! (−W) x = −D (G ∇S) in msdeform's convention (W = cotan weights of S, D = divergence, D·∇ = W). The
-//! right-hand side is linear in the G_t: row i is Σ G_t q_{t,k} over the corners k of the triangles t at
-//! vertex i, with q_{t,k} = −A_t (∇S|_t)ᵀ ∇φ_{t,k} precomputed, so a frame costs one pass over the
-//! corners. (−W) is assembled from the same per-face gradients as the q_{t,k} (it equals −W of
-//! cotan_laplacian() up to that function's cotangent clamp), so G = identity gives back S to rounding.
-//! The matrix depends on S only: it is factored once in encode() (ConstrainedQuadratic) and each frame
-//! back-substitutes three columns.
+//! (−W) x = −D (G ∇S) in msdeform's convention (W = cotan weights of S, D = divergence, D·∇ = W), per
+//! triangle Q_t x = G_t Q_t S with Q_t = −W_t. The right-hand side is linear in the G_t: row i is
+//! Σ G_t (Q_t S)_k over the corners k of the triangles t at vertex i, with (Q_t S)_k = Σ_m w_km (s_k − s_m)
+//! precomputed from edge vectors (independent of where S sits), so a frame costs one pass over the corners.
+//! Triangles of S follow cotan_laplacian()'s rule: degenerate ones are left out, and a needle's weight is
+//! bounded so that its largest |cot| is kMaxCotangent (all three cotangents scaled together, which keeps
+//! Q_t positive semi-definite; clamping them one by one would not). Matrix and right-hand side use the
+//! same Q_t, so G = identity gives back S to rounding. The matrix depends on S only: it is factored once
+//! in encode() (ConstrainedQuadratic) and each frame back-substitutes three columns, solving for x − c
+//! with c the first Dirichlet value so the rounding scales with the mesh, not with its distance from the
+//! origin. Translating or scaling S, B and B' together translates or scales S' (to rounding).
 //!
 //! Dirichlet constraints: the anchor vertices (set_anchor_vertices, e.g. the multi-scale deformer's fixed
 //! and handle vertices) are placed at their normal-displacement reconstruction b'_i + h_i n'_i on B'
 //! (= B' exactly where S = B, as on the deformer's constrained vertices). A connected component of S
 //! without an anchor — e.g. all of S when no anchors are given — has its lowest-indexed vertex pinned the
 //! same way, so the system is positive definite (report().pinned_vertices).
-//! reconstruct() is O(#Vs + #Fs + #Fb) plus the back-substitution, parallel, allocation-free once `out`
-//! has #Vs rows. Not safe to call concurrently on one object.
+//!
+//! Result check: before returning, reconstruct() verifies that every vertex of S' is finite and within
+//! 2 × (diagonal of B' ∪ Dirichlet values + diagonal of S ∪ B) of the bounding box of B' ∪ Dirichlet
+//! values; otherwise it throws SolverError naming the worst vertex.
+//! reconstruct() is O(#Vs + #Vb + #Fs + #Fb) plus the back-substitution, parallel, allocation-free once
+//! `out` has #Vs rows. Not safe to call concurrently on one object.
 class DeformationTransfer : public DetailEncoding {
  public:
   struct Report {
     bool identical_connectivity = false;  //!< triangle t of S ↔ triangle t of B
-    int degenerate_base_faces = 0;        //!< base triangles without a frame (they borrow a neighbour's)
-    std::vector<int> pinned_vertices;     //!< vertices pinned because their component had no anchor
-    int unreachable_faces = 0;            //!< S triangles left with G = identity (no usable base triangle)
-    double factor_seconds = 0;            //!< wall time of encode() (base points, correspondence, factor)
-    double seconds = 0;                   //!< wall time of the last reconstruct()
+    //! Base triangles without a frame (they borrow a neighbour's gradient): degenerate ones, and needles
+    //! (not degenerate, some |cot| > CotanLaplacian::kMaxCotangent), by cotan_laplacian()'s rule.
+    int degenerate_base_faces = 0;
+    int needle_base_faces = 0;
+    //! Triangles of S left out of the Poisson system, and S's cotangents beyond kMaxCotangent (whose
+    //! triangles' weights were bounded): the same counts as cotan_laplacian(S, Fs).
+    int degenerate_faces = 0;
+    int clamped_cotangents = 0;
+    std::vector<int> pinned_vertices;  //!< vertices pinned because their component had no anchor
+    int unreachable_faces = 0;         //!< S triangles left with G = identity (no usable base triangle)
+    double factor_seconds = 0;         //!< wall time of encode() (base points, correspondence, factor)
+    double seconds = 0;                //!< wall time of the last reconstruct()
   };
 
   explicit DeformationTransfer(const NormalDisplacementOptions& normal_options = {});
@@ -65,9 +83,10 @@ class DeformationTransfer : public DetailEncoding {
   //! list; as NormalDisplacements::encode(); SolverError if the Poisson system cannot be factored.
   void encode(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) override;
 
-  //! S' (#Vs by 3) for the deformed base B' (#Vb by 3, connectivity Fb).
+  //! S' (#Vs by 3) for the deformed base B' (#Vb by 3, connectivity Fb), in the units of B'.
   //! \throw UsageError before encode() or when B' does not have #Vb rows; InvalidInput if B' has a
-  //! non-finite coordinate.
+  //! non-finite coordinate; SolverError (index() = the vertex) if a vertex of S' is not finite or lies
+  //! beyond the bound above (out then holds no usable result).
   void reconstruct(const Positions& B_deformed, Positions& out) override;
 
   bool encoded() const { return encoded_; }
@@ -79,6 +98,8 @@ class DeformationTransfer : public DetailEncoding {
   const NormalDisplacements& normal_displacements() const { return normal_; }
 
  private:
+  void check_result(const Positions& B_deformed, const Positions& out) const;
+
   NormalDisplacements normal_;
   bool encoded_ = false;
   int num_base_vertices_ = 0;
@@ -92,6 +113,7 @@ class DeformationTransfer : public DetailEncoding {
   std::vector<int> corner_offsets_, corner_face_;
   Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> corner_q_;
   ConstrainedQuadratic system_;
+  double rest_extent_ = 0;  // diagonal of the bounding box of S ∪ B (the result check's detail allowance)
   // Base vertices whose normals the constrained vertices' Phong normals read, with their faces (CSR, in
   // face order, so the sums match VertexNormals bit for bit).
   std::vector<int> normal_vertices_, normal_offsets_, normal_faces_, normal_face_list_;

@@ -362,7 +362,9 @@ Mesh build_mesh(const Soup& soup, const std::string& path, LoadReport& report) {
       if (mesh.add_face(tri[0], tri[1], tri[2]).is_valid()) continue;
       ++report.nonmanifold_faces;
       for (auto& v : tri) {
-        v = mesh.add_vertex(mesh.point(v));
+        // A copy: add_vertex may reallocate the point array that mesh.point(v) refers into.
+        const Mesh::Point p = mesh.point(v);
+        v = mesh.add_vertex(p);
         ++report.duplicated_vertices;
       }
       mesh.add_face(tri[0], tri[1], tri[2]);

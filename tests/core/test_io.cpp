@@ -106,6 +106,24 @@ TEST_CASE("polygons are triangulated; non-manifold faces are detached and report
   CHECK(mesh_info(m, &fin).nonmanifold_faces == 1);
 }
 
+TEST_CASE("a detached face's vertex copies hold the original coordinates", "[core][io][bad-input]") {
+  // One triangle wound against its neighbour: OpenMesh cannot add it, so it is detached with vertex copies.
+  // The copies once read freed memory (a point passed by reference into a reallocating add_vertex).
+  test::TempDir tmp;
+  std::ofstream(tmp.file("miswound.off")) << "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 3 2\n";
+  for (int repeat = 0; repeat < 20; ++repeat) {  // reallocation happens at varying capacities
+    const Mesh m = load_mesh(tmp.file("miswound.off"));
+    REQUIRE(m.n_vertices() >= 4);
+    const Positions P = positions(m);
+    REQUIRE(P.allFinite());
+    for (int i = 4; i < P.rows(); ++i) {
+      double nearest = 1e300;
+      for (int j = 0; j < 4; ++j) nearest = std::min(nearest, (P.row(i) - P.row(j)).norm());
+      CHECK(nearest == 0.0);  // every copy sits exactly on an original vertex
+    }
+  }
+}
+
 TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[core][io][bad-input]") {
   test::TempDir tmp;
   auto write = [&](const std::string& name, const std::string& text) {

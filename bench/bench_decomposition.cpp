@@ -1,4 +1,4 @@
-// Decomposition S → B on the bumpy plane: region fairing (prepare = assembly + factorisation, and one
+// Decomposition S → B on the bumpy plane: the low-pass base (automatic and given detail scale), region fairing (prepare = assembly + factorisation, and one
 // re-fair of moved constraints with the stored factor) for each order, and the subdivision hierarchy
 // (build with least-squares control points, and the per-frame refine() of coarse positions to full
 // resolution).
@@ -13,6 +13,7 @@
 #include "core/scenes.h"
 #include "core/solver.h"
 #include "decomposition/fairing.h"
+#include "decomposition/low_pass.h"
 #include "decomposition/subdivision_hierarchy.h"
 
 using namespace msd::bench;
@@ -67,6 +68,20 @@ int main(int argc, char** argv) {
       }
       std::printf("  %-18s %10zu %12.2f %14.1f\n", msd::to_string(fo.order), fairing.free_vertices().size(),
                   prepare, median(solves));
+      std::fflush(stdout);
+    }
+
+    // The default multi-scale base: low-pass at the automatic detail scale (one factorisation per
+    // candidate of the bisection), and at a given scale (one factorisation).
+    for (const double given : {0.0, 0.15}) {
+      msd::LowPassOptions lo;
+      lo.detail_scale = given;
+      msd::LowPassReport report;
+      const auto t_lp = Clock::now();
+      msd::low_pass_base(scene.P, scene.F, lo, &report);
+      std::printf("  low-pass %-9s scale %.3g, %zu candidates, %.2f s, fold ratio %.3g\n",
+                  given > 0 ? "(given)" : "(auto)", report.detail_scale, report.candidates.size(),
+                  seconds_since(t_lp), report.check.max_fold_ratio);
       std::fflush(stdout);
     }
 

@@ -1,0 +1,152 @@
+#include "decomposition/low_pass.h"
+
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "core/errors.h"
+#include "core/laplacian.h"
+#include "core/solver.h"
+#include "decomposition/laplace.h"
+
+namespace msd {
+namespace {
+
+constexpr const char* kWho = "low_pass_base";
+constexpr double kPi = 3.14159265358979323846;
+// Fidelity weight of vertices without area, relative to the mean mass: B = S there.
+constexpr double kMassFloor = 1e-12;
+// Automatic scale: vertices whose details may fold at rest (mesh defects: slivers, near-duplicates),
+// as a fraction of all vertices, before a candidate counts as folding.
+constexpr double kDefectFraction = 1e-3;
+// Automatic scale: a base with less than this fraction of S's area has lost the shape (a tube smoothed
+// towards its axis), whatever its details look like.
+constexpr double kMinAreaRatio = 0.5;
+
+// (M + ℓ⁴ W M̃⁻¹ W) B = M S on the vertices off the mesh boundary, B = S on it; prepared once per mesh,
+// solve() refactors for each ℓ (same pattern). Coordinates are relative to the centroid of S.
+class LowPassSystem {
+ public:
+  LowPassSystem(const Positions& S, const Faces& F) {
+    const CotanLaplacian lap = cotan_laplacian(S, F);
+    const int nv = static_cast<int>(S.rows());
+    mass_ = lap.mass;
+    const double floor = kMassFloor * std::max(mass_.mean(), 1e-300);
+    Eigen::VectorXd inverse(nv);
+    std::vector<char> boundary(nv, 0);
+    for (int v : boundary_vertices(F, nv)) boundary[v] = 1;
+    for (int v = 0; v < nv; ++v) {
+      inverse[v] = (mass_[v] > 0 && !boundary[v]) ? 1 / mass_[v] : 0.0;
+      mass_[v] = std::max(mass_[v], floor);
+      (boundary[v] ? known_ : unknown_).push_back(v);
+    }
+    bending_ = lap.W * inverse.asDiagonal() * lap.W;
+    centroid_ = S.colwise().mean();
+    centred_ = S.rowwise() - centroid_.transpose();
+    known_values_.resize(static_cast<Eigen::Index>(known_.size()), 3);
+    for (size_t c = 0; c < known_.size(); ++c) known_values_.row(c) = centred_.row(known_[c]);
+  }
+
+  Positions solve(double detail_scale) {
+    const double l = detail_scale / (2 * kPi), l4 = l * l * l * l;
+    SparseMatrix A = l4 * bending_;
+    A += SparseMatrix(mass_.asDiagonal());
+    const SparseMatrix Auu = submatrix(A, unknown_, unknown_);
+    try {
+      if (solver_.factored())
+        solver_.refactor(Auu);
+      else
+        solver_.factor(Auu);
+    } catch (const SolverError& e) {
+      const long v = e.index() >= 0 ? unknown_[e.index()] : -1;
+      throw SolverError(std::string(kWho) + ": the smoothing system is singular" +
+                            (v >= 0 ? " near vertex " + std::to_string(v) : std::string()) +
+                            " (degenerate faces around it?): " + e.what(),
+                        v);
+    }
+    Eigen::MatrixXd rhs(static_cast<Eigen::Index>(unknown_.size()), 3), X;
+    for (size_t u = 0; u < unknown_.size(); ++u) rhs.row(u) = mass_[unknown_[u]] * centred_.row(unknown_[u]);
+    if (!known_.empty()) rhs -= submatrix(A, unknown_, known_) * known_values_;
+    solver_.solve(rhs, X);
+    if (!X.allFinite()) throw SolverError(std::string(kWho) + ": the smoothed positions are not finite");
+    Positions B(centred_.rows(), 3);
+    for (size_t u = 0; u < unknown_.size(); ++u) B.row(unknown_[u]) = X.row(u);
+    for (size_t c = 0; c < known_.size(); ++c) B.row(known_[c]) = known_values_.row(c);
+    return B.rowwise() + centroid_.transpose();
+  }
+
+ private:
+  Eigen::VectorXd mass_;
+  SparseMatrix bending_;
+  Vec3 centroid_;
+  Positions centred_;
+  std::vector<int> known_, unknown_;  // mesh-boundary vertices (B = S) and the others
+  Eigen::MatrixXd known_values_;
+  SparseSPDSolver solver_;
+};
+
+// Twice the largest distance from the centroid: a size that, unlike the bounding box, does not change
+// when S is rotated.
+double diameter(const Positions& S) {
+  const Eigen::RowVector3d c = S.colwise().mean();
+  return 2 * std::sqrt((S.rowwise() - c).rowwise().squaredNorm().maxCoeff());
+}
+
+}  // namespace
+
+Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions& options, LowPassReport* report) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_mesh_arrays(S, F, kWho);
+  if (F.rows() == 0) throw InvalidInput(std::string(kWho) + ": the mesh has no faces");
+  if (!(options.detail_scale >= 0) || !std::isfinite(options.detail_scale))
+    throw InvalidInput(std::string(kWho) + ": the detail scale must be finite and >= 0 (0 = automatic), got " +
+                       std::to_string(options.detail_scale));
+  if (!(options.max_fold_ratio > 0 && options.max_fold_ratio <= 1))
+    throw InvalidInput(std::string(kWho) + ": max_fold_ratio must be in (0, 1]");
+  if (!(options.plateau_growth > 1) || !std::isfinite(options.plateau_growth))
+    throw InvalidInput(std::string(kWho) + ": plateau_growth must be finite and > 1");
+  if (!(options.max_scale_fraction > 0) || !std::isfinite(options.max_scale_fraction))
+    throw InvalidInput(std::string(kWho) + ": max_scale_fraction must be positive and finite");
+
+  LowPassReport r;
+  r.mean_edge_length = mean_edge_length(S, F);
+  LowPassSystem system(S, F);
+  Positions B;
+  if (options.detail_scale > 0) {
+    r.detail_scale = options.detail_scale;
+    B = system.solve(r.detail_scale);
+    r.check = check_details(S, B, F);
+  } else {
+    r.automatic = true;
+    const double smallest = 2 * r.mean_edge_length, largest = options.max_scale_fraction * diameter(S);
+    const double area = face_areas(S, F).sum();
+    const long allowed_folds = static_cast<long>(kDefectFraction * static_cast<double>(S.rows()));
+    double previous_rms = 0;
+    for (int k = 0; smallest * std::pow(std::sqrt(2.0), k) <= largest; ++k) {
+      const double L = smallest * std::pow(std::sqrt(2.0), k);
+      Positions trial = system.solve(L);
+      const DetailCheck check = check_details(S, trial, F);
+      const double area_ratio = face_areas(trial, F).sum() / area;
+      r.candidates.push_back({L, check, area_ratio});
+      if (check.fold_ratio_p999 > options.max_fold_ratio || check.folding_vertices > allowed_folds ||
+          area_ratio < kMinAreaRatio)
+        break;  // from here on the base loses the shape, not just the details
+      if (k > 0 && check.rms_height < options.plateau_growth * previous_rms) {
+        r.detail_scale = L;
+        r.check = check;
+        B.swap(trial);
+        break;
+      }
+      previous_rms = check.rms_height;
+    }
+    if (r.detail_scale == 0) {  // no separate detail layer: the base is S itself
+      B = S;
+      r.check = check_details(S, B, F);
+    }
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (report) *report = std::move(r);
+  return B;
+}
+
+}  // namespace msd

@@ -1,0 +1,79 @@
+#pragma once
+//! \file A base surface at a detail scale (seed 9.3 decomposition S → B): a low-pass of the whole of S
+//! that removes features shorter than a length L and keeps the shape. Fairing the free region
+//! (fairing.h) replaces everything inside it by a membrane or thin plate, which is the right base only
+//! when the region is small next to the shape; on a cylinder bent over most of its length it shrinks the
+//! base to a thread, and on a whole-body edit it collapses it.
+//!
+//! The base minimises a fidelity term plus a thin-plate term (bi-Laplacian smoothing with a data term,
+//! the Tikhonov form of the low-pass filters of Taubin 1995 and Desbrun et al. 1999; the bi-Laplacian
+//! penalty as in the multiresolution hierarchies of Kobbelt et al. 1998 and Botsch & Kobbelt 2004):
+//!   B = argmin  ‖B − S‖²_M + ℓ⁴ ‖ΔB‖²_M,   i.e.   (M + ℓ⁴ W M̃⁻¹ W) B = M S,
+//! with the cotan Laplacian Δ = M⁻¹W of S (core/laplacian.h) and ℓ = L / 2π. On a mode of wavelength λ
+//! (eigenvalue (2π/λ)² of −Δ) it is the filter 1 / (1 + (L/λ)⁴): features shorter than L are removed
+//! (a bump of wavelength L/2 keeps 6 % of its height), features longer than L kept (2L: 94 %). The
+//! system is symmetric positive definite; constants are in the kernel of W, so B moves with S under any
+//! rigid motion or uniform scaling (L scales with it). Mesh-boundary vertices keep their place (B = S
+//! there, and M̃⁻¹ is zero on them): their Laplacian carries the outline's curvature rather than the
+//! surface's, and a free outline curls, so that S's outline vertices found no base point along the normals
+//! (measured: 104 of them on the 10k bumpy plane). M̃⁻¹ is also zero on vertices without area.
+
+#include <vector>
+
+#include "core/types.h"
+#include "decomposition/detail_check.h"
+
+namespace msd {
+
+struct LowPassOptions {
+  //! L, in mesh units: features shorter than L go into the details. 0 chooses L automatically (below).
+  double detail_scale = 0;
+  //! Automatic choice: a candidate L whose details come close to folding over their base
+  //! (DetailCheck::fold_ratio_p999 above this), or fold at rest on more than 0.1 % of the vertices,
+  //! removes shape rather than details: the search stops there. In (0, 1].
+  double max_fold_ratio = 0.5;
+  //! Automatic choice: the detail layer ends where the removed height stops growing with L: the first
+  //! candidate whose rms detail height is less than this factor times the previous candidate's (one
+  //! √2 step of L earlier). > 1.
+  double plateau_growth = 1.25;
+  //! Automatic choice: candidates are L = 2h̄·√2^k (h̄ the mean edge length), k = 0, 1, …, up to this
+  //! fraction of the diameter of S (twice the largest distance from the centroid: unlike the bounding
+  //! box, it does not change when S turns). > 0.
+  double max_scale_fraction = 0.6;
+};
+
+//! One scale the automatic choice evaluated.
+struct LowPassCandidate {
+  double detail_scale = 0;
+  DetailCheck check;
+  double area_ratio = 1;  //!< area of the candidate base over the area of S
+};
+
+struct LowPassReport {
+  double detail_scale = 0;  //!< L used (mesh units); 0 when no detail layer was found (B = S)
+  bool automatic = false;   //!< chosen by the fold check (LowPassOptions::detail_scale was 0)
+  double mean_edge_length = 0;
+  std::vector<LowPassCandidate> candidates;  //!< what the automatic choice evaluated, in that order
+  DetailCheck check;                         //!< of the returned base
+  double seconds = 0;
+};
+
+//! S: #V by 3, F: #F by 3. Returns B, #V by 3, with S's connectivity.
+//!
+//! Automatic scale (detail_scale = 0), from the detail heights each candidate removes: candidates are
+//! tried from the smallest up (one numeric refactorisation each, same pattern). A mesh with a detail
+//! layer shows a plateau: the rms height of S − B grows quickly while L passes the details' size and
+//! then stops growing (measured on the bumpy plane: ×1.8 per √2 step below the bump size, ×1.13 then
+//! ×1.04 above it), because nothing but the shape is left to remove. The first candidate on the plateau
+//! is chosen (the survey's bumpy plane: L = 79 on a 100 × 100 plane with bumps of height 10). A mesh
+//! without one (a smooth cylinder, a bar, most scans: ×1.4–2.5 at every step) has no
+//! detail layer to separate, and B = S (detail_scale 0 in the report): the multi-scale deformer then
+//! equals its base deformer. The search stops early where a candidate would remove shape: its details
+//! come close to folding (max_fold_ratio) or its area falls below half of S's (a tube smoothed towards
+//! its axis, which a plateau would otherwise follow once nothing is left).
+//! \throw InvalidInput for an index out of range, a non-finite position, no faces, or options out of
+//! range; SolverError naming the vertex if the system cannot be factored.
+Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions& options = {},
+                        LowPassReport* report = nullptr);
+
+}  // namespace msd

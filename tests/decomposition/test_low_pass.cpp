@@ -1,0 +1,109 @@
+#include <catch2/catch.hpp>
+
+#include "core/errors.h"
+#include "core/scenes.h"
+#include "decomposition/detail_check.h"
+#include "decomposition/low_pass.h"
+#include "test_util.h"
+
+using namespace msd;
+using Catch::Matchers::Contains;
+
+TEST_CASE("low-pass base: the automatic scale removes the bumps and keeps the plane", "[decomposition][low-pass]") {
+  SceneOptions o;
+  o.resolution = 10000;
+  const Scene s = make_surface(SceneShape::Plane, o);
+  LowPassReport report;
+  const Positions B = low_pass_base(s.P, s.F, {}, &report);
+  INFO("detail scale " << report.detail_scale << ", max height " << report.check.max_height);
+  CHECK(report.automatic);
+  CHECK(report.detail_scale > 0.1);  // longer than the bumps (on a 0.1 lattice)
+  CHECK(report.check.fold_ratio_p999 <= 0.5);
+  // Away from the outline, B lies within 15 % of the bump height of the analytic smooth plane, and the
+  // detail heights are the bumps.
+  double off_base = 0, off_detail = 0;
+  for (int v = 0; v < s.P.rows(); ++v) {
+    if (std::min({s.P(v, 0), s.P(v, 1), 1 - s.P(v, 0), 1 - s.P(v, 1)}) < 0.1) continue;
+    off_base = std::max(off_base, std::abs(B(v, 2) - s.smooth(v, 2) - s.heights.mean()));
+    off_detail = std::max(off_detail, std::abs((s.P(v, 2) - B(v, 2)) - (s.heights[v] - s.heights.mean())));
+  }
+  CHECK(off_base <= 0.15 * s.bump_height);
+  CHECK(off_detail <= 0.15 * s.bump_height);
+}
+
+TEST_CASE("low-pass base: a cylinder keeps its radius (fairing shrank it to a thread)", "[decomposition][low-pass]") {
+  // Closed tube of radius 1 and length 12 along z, 48 × 97 vertices.
+  const int around = 48, along = 97;
+  Positions P(around * along, 3);
+  Faces F(2 * around * (along - 1), 3);
+  for (int j = 0; j < along; ++j)
+    for (int i = 0; i < around; ++i) {
+      const double t = 2 * M_PI * i / around;
+      P.row(j * around + i) << std::cos(t), std::sin(t), 12.0 * j / (along - 1);
+    }
+  int f = 0;
+  for (int j = 0; j + 1 < along; ++j)
+    for (int i = 0; i < around; ++i) {
+      const int a = j * around + i, b = j * around + (i + 1) % around, c = a + around, d = b + around;
+      F.row(f++) << a, b, d;
+      F.row(f++) << a, d, c;
+    }
+  LowPassReport report;
+  const Positions B = low_pass_base(P, F, {}, &report);
+  INFO("detail scale " << report.detail_scale);
+  for (int v = 0; v < P.rows(); ++v) {
+    if (P(v, 2) < 2 || P(v, 2) > 10) continue;  // the open ends may move a little
+    CHECK(std::hypot(B(v, 0), B(v, 1)) == Approx(1).epsilon(0.02));
+  }
+}
+
+TEST_CASE("low-pass base: moves with S under rigid motions and scaling", "[decomposition][low-pass]") {
+  SceneOptions o;
+  o.resolution = 3000;
+  const Scene s = make_surface(SceneShape::Bar, o);
+  LowPassReport r0, r1;
+  const Positions B0 = low_pass_base(s.P, s.F, {}, &r0);
+  const Mat3 R = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  const double scale = 250;
+  const Vec3 t(1000, -2000, 500);
+  const Positions S1 = test::rigid_motion(s.P * scale, R, t);
+  const Positions B1 = low_pass_base(S1, s.F, {}, &r1);
+  CHECK(r1.detail_scale == Approx(scale * r0.detail_scale).epsilon(1e-9));
+  CHECK(test::max_row_distance(B1, test::rigid_motion(B0 * scale, R, t)) <= 1e-8 * bounding_box_diagonal(S1));
+}
+
+TEST_CASE("low-pass base: a given scale is used as is; bad options are refused", "[decomposition][low-pass]") {
+  SceneOptions o;
+  o.resolution = 3000;
+  const Scene s = make_surface(SceneShape::Plane, o);
+  LowPassOptions options;
+  options.detail_scale = 0.05;
+  LowPassReport report;
+  low_pass_base(s.P, s.F, options, &report);
+  CHECK_FALSE(report.automatic);
+  CHECK(report.detail_scale == 0.05);
+  CHECK(report.candidates.empty());
+  options.detail_scale = -1;
+  CHECK_THROWS_AS(low_pass_base(s.P, s.F, options), InvalidInput);
+  options.detail_scale = 0;
+  options.max_fold_ratio = 0;
+  CHECK_THROWS_WITH(low_pass_base(s.P, s.F, options), Contains("max_fold_ratio"));
+}
+
+TEST_CASE("detail check: the fold ratio is height over curvature radius on a sphere", "[decomposition][low-pass]") {
+  Positions P;
+  Faces F;
+  test::icosphere(4, P, F);
+  const Positions B = 2.0 * P;  // radius 2, outward normals
+  // Details pointing inwards by 0.5 (S on radius 1.5): ratio 0.25; by 3 (through the centre): it folds.
+  const DetailCheck in = check_details(1.5 * P, B, F);
+  CHECK(in.max_fold_ratio == Approx(0.25).epsilon(0.1));  // exact with exact normals; area-weighted ones deviate
+  CHECK(in.min_curvature_radius == Approx(2).epsilon(0.1));
+  CHECK(in.max_height == Approx(0.5));
+  CHECK(in.folding_vertices == 0);
+  const DetailCheck through = check_details(-1.0 * P, B, F);
+  CHECK(through.max_fold_ratio == Approx(1.5).epsilon(0.1));
+  CHECK(through.folding_vertices == P.rows());
+  // Outward details never fold on a convex base.
+  CHECK(check_details(3.0 * P, B, F).max_fold_ratio == 0);
+}

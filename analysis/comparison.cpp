@@ -9,6 +9,7 @@
 #include "core/errors.h"
 #include "core/mesh_io.h"
 #include "core/scenes.h"
+#include "reconstruction/multiscale.h"
 
 namespace msd {
 namespace {
@@ -74,6 +75,9 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
       std::sort(frames.begin(), frames.end());
       r.frame_ms = frames[frames.size() / 2];
       if (!r.result.allFinite()) throw SolverError(method + " produced non-finite positions");
+      r.folded_faces = deformer->frame_report().folded_faces;
+      if (const auto* ms = dynamic_cast<const MultiscaleDeformer*>(deformer.get()))
+        r.warning = ms->decomposition_report().warning;
       r.handle_error = handle_error(rest, r.result, edit.region, edit.transforms);
       r.rigidity = rigidity_error(rest, r.result, F).stats;
       const DetailDistortion d = detail_distortion(rest, r.result, F, edit.region);
@@ -119,8 +123,9 @@ std::vector<Column> columns() {
       {"distortion_p95", [=](const MethodResult& r) { return g(r.distortion.p95); }},
       {"distortion_max", [=](const MethodResult& r) { return g(r.distortion.max); }},
       {"self_intersections", [](const MethodResult& r) { return std::to_string(r.self_intersections); }},
+      {"folded_faces", [](const MethodResult& r) { return std::to_string(r.folded_faces); }},
       {"volume_change", [=](const MethodResult& r) { return r.volume_change ? g(*r.volume_change) : std::string("n/a"); }},
-      {"error", [](const MethodResult& r) { return r.error; }},
+      {"message", [](const MethodResult& r) { return r.ok ? r.warning : r.error; }},  // error, or warning
   };
 }
 

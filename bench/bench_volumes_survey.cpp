@@ -10,8 +10,6 @@
 //   T in mean edge lengths squared (default 6), K smoothing steps (default 2). An edit that names a
 //   built-in scene (core/scenes.h, e.g. bar-bend120; 10k vertices) is generated instead of read.
 //   --fair: the base is the thin-plate fairing of the free region (fair_region) instead of a smoothing.
-// It links msd::analysis (CGAL, metrics), so it needs its own line in bench/CMakeLists.txt:
-//   msd_add_bench(bench_volumes_survey msd::analysis)
 #include <algorithm>
 #include <cstdio>
 #include <string>

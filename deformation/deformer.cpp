@@ -35,6 +35,11 @@ void Deformer::deform(const std::vector<Mat4>& transforms, Positions& out) {
   check_affine(transforms, name().c_str());
   if (out.rows() != num_vertices_) out.resize(num_vertices_, 3);
   do_deform(transforms, out);
+  if (!out.allFinite())
+    for (Eigen::Index v = 0; v < out.rows(); ++v)
+      if (!out.row(v).allFinite())
+        throw SolverError(name() + ": the frame gave vertex " + std::to_string(v) + " a non-finite position",
+                          static_cast<int>(v));
 }
 
 Positions Deformer::deform(const std::vector<Mat4>& transforms) {

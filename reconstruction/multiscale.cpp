@@ -1,9 +1,9 @@
 #include "reconstruction/multiscale.h"
 
 #include <cmath>
+#include <cstdio>
 
 #include "core/errors.h"
-#include "core/laplacian.h"
 #include "decomposition/remesh.h"
 #include "detail/closest_point.h"
 #include "detail/deformation_transfer.h"
@@ -40,26 +40,45 @@ Region transfer_region(const Positions& S, const Region& region, const Positions
   return Region::from_codes(std::move(codes));
 }
 
-// Fairing a large or tube-like free region can shrink it to (nearly) nothing; the shell operator on such
-// a base is singular. Say so in terms of the decomposition rather than let the solver fail.
-void check_base(const Mesh& mesh, const Positions& S, const Positions& B, const Faces& F) {
-  const Eigen::VectorXd rest = cotan_laplacian(S, F).mass, base = cotan_laplacian(B, F).mass;
-  for (auto v : mesh.vertices()) {
-    const int i = v.idx();
-    if (rest[i] > 0 && !(base[i] > 1e-6 * rest[i]))
-      throw TopologyError("multiscale: fairing the free region collapsed the base near vertex " + std::to_string(i) +
-                          " (its area fell to " + std::to_string(base[i] / rest[i]) +
-                          " of the input's): the free region is too large or tube-like for a faired base. Use a "
-                          "smaller free region, a lower fairing order, or the shell method directly");
-  }
+// Refuses a base the details fold over at rest (beyond a few defect vertices), naming the cause and a
+// remedy; returns a warning when a few vertices fold or the details stand tall against the base.
+std::string check_decomposition(const DecompositionReport& r, const MultiscaleOptions& o, long num_vertices) {
+  const DetailCheck& c = r.check;
+  const bool folds = c.folding_vertices > 0, tall = c.fold_ratio_p999 > o.low_pass.max_fold_ratio;
+  if (!folds && !tall) return {};
+  char where[200];
+  std::snprintf(where, sizeof where, "near vertex %d the detail height %.3g reaches %.0f%% of the base's curvature radius %.3g",
+                c.worst_vertex, c.worst_height, 100 * c.max_fold_ratio, c.worst_radius);
+  std::string remedy;
+  if (r.base == BaseKind::Fairing)
+    remedy = "fairing the free region removed the shape with the details (the free region is large or tube-like "
+             "next to the shape); use the low-pass base (BaseKind::LowPass, CLI --base low-pass), which keeps the "
+             "shape, or a smaller free region";
+  else if (!r.low_pass.automatic)
+    remedy = "the detail scale " + std::to_string(r.low_pass.detail_scale) +
+             " is too large for this shape; use a smaller one, or 0 to choose it automatically";
+  else
+    remedy = "the mesh has defects there (slivers or near-duplicate vertices); repair them, or set a smaller detail scale";
+  if (c.folding_vertices > static_cast<long>(1e-3 * static_cast<double>(num_vertices)))
+    throw TopologyError("multiscale: the details fold over at rest (" + std::to_string(c.folding_vertices) +
+                        " vertices with a height above the base's curvature radius; " + where + "): " + remedy);
+  if (folds)
+    return "multiscale: the details of " + std::to_string(c.folding_vertices) + " vertices fold over at rest (" +
+           where + "): " + remedy;
+  return std::string("multiscale: the details come close to folding over the base (") + where +
+         "); an edit that bends the base further may fold them: " + remedy;
 }
 
 }  // namespace
+
+const char* to_string(BaseKind kind) { return kind == BaseKind::LowPass ? "low-pass" : "fairing"; }
 
 MultiscaleDeformer::MultiscaleDeformer(MultiscaleOptions options)
     : options_(std::move(options)), shell_(options_.shell), encoding_(make_encoding(options_.encoding)) {
   if (!(options_.remesh_base_edge_length >= 0) || !std::isfinite(options_.remesh_base_edge_length))
     throw InvalidInput("multiscale: the base remeshing edge length must be finite and >= 0 (0 = no remeshing)");
+  if (!(options_.low_pass.detail_scale >= 0) || !std::isfinite(options_.low_pass.detail_scale))
+    throw InvalidInput("multiscale: the detail scale must be finite and >= 0 (0 = automatic)");
   if (options_.remesh_base_edge_length > 0 && options_.encoding == "vectors")
     throw InvalidInput("multiscale: displacement vectors need S and B to share connectivity; a remeshed base needs "
                        "the normal, volumes or transfer encoding");
@@ -68,35 +87,56 @@ MultiscaleDeformer::MultiscaleDeformer(MultiscaleOptions options)
 void MultiscaleDeformer::do_prepare(const Mesh& mesh, const Region& region) {
   const Positions S = positions(mesh);
   const Faces F = faces(mesh);
-  FairingOptions fairing;
-  fairing.order = options_.fairing;
-  base_ = fair_region(mesh, region, fairing);  // S → B
-  check_base(mesh, S, base_, F);
+  decomposition_ = {};
+  decomposition_.base = options_.base;
+  if (options_.base == BaseKind::LowPass) {
+    base_ = low_pass_base(S, F, options_.low_pass, &decomposition_.low_pass);  // S → B
+    decomposition_.check = decomposition_.low_pass.check;
+  } else {
+    FairingOptions fairing;
+    fairing.order = options_.fairing;
+    base_ = fair_region(mesh, region, fairing);
+    decomposition_.check = check_details(S, base_, F);
+  }
+  decomposition_.warning = check_decomposition(decomposition_, options_, S.rows());
   base_faces_ = F;
   Region base_region = region;
-  placed_.clear();
   if (options_.remesh_base_edge_length > 0) {
-    rest_ = S;
-    for (int v : region.constrained_vertices()) placed_.emplace_back(v, region.handle_of(v));
     RemeshResult r = remesh_isotropic(base_, F, options_.remesh_base_edge_length);
     base_region = transfer_region(S, region, r.P, r.F);
     base_ = std::move(r.P);
     base_faces_ = std::move(r.F);
   }
-  const Mesh base_mesh = make_mesh(base_, base_faces_);
-  shell_.prepare(base_mesh, base_region);
+  try {
+    shell_.prepare(make_mesh(base_, base_faces_), base_region);
+  } catch (const Error& e) {
+    throw SolverError(std::string("multiscale: the shell operator on the base B (not the input mesh) failed; the "
+                                  "base is degenerate there, try a smaller detail scale: ") + e.what());
+  }
+  // Without a detail layer (B = S, see low_pass_base) every encoding would give S' = B': skip it.
+  base_is_input_ = options_.remesh_base_edge_length == 0 && base_ == S;
   encoding_->set_anchor_vertices(region.constrained_vertices());
-  encoding_->encode(S, F, base_, base_faces_);  // D = S ⊖ B
+  if (!base_is_input_) encoding_->encode(S, F, base_, base_faces_);  // D = S ⊖ B
   base_deformed_ = base_;
+
+  // Every constrained vertex of S is placed exactly after reconstruction.
+  rest_ = S;
+  placed_.clear();
+  for (int v : region.constrained_vertices()) placed_.emplace_back(v, region.handle_of(v));
+  fold_check_.prepare(S, F, base_, base_faces_);
 }
 
 void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
-  shell_.deform(transforms, base_deformed_);    // B → B'
-  encoding_->reconstruct(base_deformed_, out);  // S' = B' ⊕ D
+  shell_.deform(transforms, base_deformed_);  // B → B'
+  if (base_is_input_)
+    out = base_deformed_;  // no detail layer: S' = B'
+  else
+    encoding_->reconstruct(base_deformed_, out);  // S' = B' ⊕ D
   for (const auto& [v, k] : placed_) {
     const Vec3 p = rest_.row(v);
     out.row(v) = k < 0 ? p : transform_point(transforms[k], p);
   }
+  frame_report_.folded_faces = fold_check_.count(out, base_deformed_);
 }
 
 }  // namespace msd

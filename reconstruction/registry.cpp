@@ -19,6 +19,8 @@ std::unique_ptr<Deformer> make_deformer(const std::string& name, const MethodOpt
     MultiscaleOptions o;
     o.encoding = name.substr(prefix.size());
     o.shell = options.shell;
+    o.base = options.base;
+    o.low_pass = options.low_pass;
     o.fairing = options.fairing;
     o.remesh_base_edge_length = options.remesh_base_edge_length;
     return std::make_unique<MultiscaleDeformer>(o);

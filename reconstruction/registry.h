@@ -10,6 +10,7 @@
 #include "deformation/deformer.h"
 #include "deformation/propagation.h"
 #include "deformation/shell.h"
+#include "reconstruction/multiscale.h"
 
 namespace msd {
 
@@ -17,7 +18,9 @@ namespace msd {
 struct MethodOptions {
   ShellOptions shell;               //!< shell, and the base operator of every multiscale-* method
   PropagationOptions propagation;   //!< propagate
-  FairingOrder fairing = FairingOrder::ThinPlate;  //!< multiscale-*: decomposition
+  BaseKind base = BaseKind::LowPass;               //!< multiscale-*: how the base is computed
+  LowPassOptions low_pass;                         //!< multiscale-*: detail scale (0 = automatic)
+  FairingOrder fairing = FairingOrder::ThinPlate;  //!< multiscale-* with BaseKind::Fairing
   double remesh_base_edge_length = 0;  //!< multiscale-*: > 0 remeshes the base isotropically (CGAL)
 };
 

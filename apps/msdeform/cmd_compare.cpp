@@ -116,14 +116,12 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("-o,--output", a->output, "Output folder (created; finished files are replaced atomically)")
       ->capture_default_str();
   cmd->add_flag("--no-self-intersections", a->no_self_intersections, "Skip the CGAL self-intersection count");
-  auto* shell = cmd->add_option_group("shell", "operator options shared by shell and multiscale-*");
-  shell->add_option("--ks", a->method.options.shell.ks, "stretching stiffness")->capture_default_str();
-  shell->add_option("--kb", a->method.options.shell.kb, "bending stiffness")->capture_default_str();
+  a->method.add_settings(*cmd);
   cmd->callback([a] {
     const auto start = std::chrono::steady_clock::now();
     ComparisonOptions options;
     if (!a->methods.empty()) options.methods = a->methods;
-    options.method_options = a->method.options;
+    options.method_options = a->method.method_options();
     options.self_intersections = !a->no_self_intersections;
     options.progress = [](const std::string& line) { std::fprintf(stderr, "  %s\n", line.c_str()); };
     check_method_names(options.methods);  // fail fast, before any work

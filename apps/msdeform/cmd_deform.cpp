@@ -8,6 +8,7 @@
 #include "core/errors.h"
 #include "analysis/metrics.h"
 #include "core/mesh_io.h"
+#include "reconstruction/multiscale.h"
 
 namespace msd::cli {
 
@@ -41,6 +42,26 @@ void add_deform_command(CLI::App& app) {
     std::printf("%s on %s: %ld vertices (%zu free, %d handle(s))\n", deformer->name().c_str(), c.name.c_str(),
                 long(rest.rows()), c.region.free_vertices().size(), c.region.num_handles());
     std::printf("  prepare %.1f ms, frame %.2f ms, handle error %.3g\n", prepare_ms, frame_ms, handle_error(rest, out, c.region, c.transforms));
+    if (const auto* ms = dynamic_cast<const MultiscaleDeformer*>(deformer.get())) {
+      const DecompositionReport& d = ms->decomposition_report();
+      if (d.base == BaseKind::LowPass && d.low_pass.detail_scale > 0)
+        std::printf("  base: low-pass at detail scale %.4g (%s)\n", d.low_pass.detail_scale,
+                    d.low_pass.automatic ? "chosen automatically; --detail-scale sets it" : "given");
+      else if (d.base == BaseKind::LowPass)
+        std::printf("  base: the mesh itself (no separate detail layer found; --detail-scale sets one)\n");
+      else
+        std::printf("  base: faired free region\n");
+      std::printf("  details: max height %.4g, base's smallest curvature radius %.4g, fold ratio %.3g\n",
+                  d.check.max_height, d.check.min_curvature_radius, d.check.max_fold_ratio);
+      if (!d.warning.empty()) std::fprintf(stderr, "warning: %s\n", d.warning.c_str());
+    }
+    const FrameReport& report = deformer->frame_report();
+    if (report.folded_faces >= 0) {
+      std::printf("  folded triangles (normal turned against the deformed base's): %d\n", report.folded_faces);
+      if (report.folded_faces > 0)
+        std::fprintf(stderr, "warning: %d triangles of the result folded over; try --encoding volumes or transfer, "
+                     "or a smaller --detail-scale\n", report.folded_faces);
+    }
     std::printf("  wrote %s\n", output->c_str());
   });
 }

@@ -18,6 +18,12 @@ void DeformerOptions::add_to(CLI::App& cmd) {
   cmd.add_option("--method", method, "Editing method: shell|propagate|multiscale (with --encoding), or a full name: " +
                                          joined(method_names(), "|"))
       ->capture_default_str();
+  cmd.add_option("--encoding", encoding, "multiscale: detail encoding: " + joined(encoding_names(), "|"))
+      ->capture_default_str();
+  add_settings(cmd);
+}
+
+void DeformerOptions::add_settings(CLI::App& cmd) {
   auto* shell = cmd.add_option_group("shell", "shell and multiscale: the thin-shell operator (9.2)");
   shell->add_option("--ks", options.shell.ks, "stretching stiffness (membrane)")->capture_default_str();
   shell->add_option("--kb", options.shell.kb, "bending stiffness (thin plate)")->capture_default_str();
@@ -43,8 +49,19 @@ void DeformerOptions::add_to(CLI::App& cmd) {
           CLI::ignore_case))
       ->default_str("linear");
   auto* ms = cmd.add_option_group("multiscale", "multiscale: decompose, deform the base, add the details back (9.3)");
-  ms->add_option("--encoding", encoding, "detail encoding: " + joined(encoding_names(), "|"))->capture_default_str();
-  ms->add_option("--fairing", fairing_order, "fairing order of the base: 1 membrane, 2 thin plate, 3 minimum variation")
+  ms->add_option("--base", options.base,
+                 "low-pass: smooth all of S at the detail scale (keeps the shape); fairing: fair the free region "
+                 "(only for free regions small next to the shape)")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, BaseKind>{{"low-pass", BaseKind::LowPass}, {"fairing", BaseKind::Fairing}},
+          CLI::ignore_case))
+      ->default_str("low-pass");
+  ms->add_option("--detail-scale", options.low_pass.detail_scale,
+                 "low-pass base: features shorter than this length (mesh units) are details; 0 chooses it from the "
+                 "detail heights (where they stop growing with the scale; no detail layer: the base is the mesh)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  ms->add_option("--fairing", fairing_order, "--base fairing: order 1 membrane, 2 thin plate, 3 minimum variation")
       ->check(CLI::Range(1, 3))
       ->capture_default_str();
   ms->add_option("--remesh-base", options.remesh_base_edge_length,

@@ -15,7 +15,10 @@ struct DeformerOptions {
   std::string encoding = "normal";
   int fairing_order = 2;
   MethodOptions options;
+  // --method, --encoding and add_settings().
   void add_to(CLI::App& cmd);
+  // The methods' settings alone (operator, propagation, multi-scale decomposition), for runs of several methods.
+  void add_settings(CLI::App& cmd);
   // The registry name: --method, with "multiscale" completed by --encoding.
   std::string method_name() const;
   // The chosen method, configured. Throws InvalidInput for an unknown name, listing the known ones.

@@ -18,10 +18,16 @@ void EditCaseOptions::add_to(CLI::App& cmd) {
       ->capture_default_str();
 }
 
-EditCase EditCaseOptions::load(bool need_transforms) const {
+EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {
   if (!scene.empty()) return scene_case(scene, parse_resolution(resolution));
   if (mesh.empty()) throw InvalidInput("give a mesh file with --sel and --def, or a built-in --scene");
-  if (sel.empty()) throw InvalidInput("a mesh file needs --sel (the region)");
+  if (sel.empty()) {
+    if (need_region) throw InvalidInput("a mesh file needs --sel (the region)");
+    EditCase c;
+    c.name = std::filesystem::path(mesh).stem().string();
+    c.mesh = load_mesh(mesh);
+    return c;
+  }
   if (need_transforms) {
     if (def.empty()) throw InvalidInput("a mesh file needs --def (the handle transforms)");
     return file_case(mesh, sel, def);

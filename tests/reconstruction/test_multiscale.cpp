@@ -174,16 +174,87 @@ TEST_CASE("multiscale: a remeshed base (CGAL isotropic remeshing) for normal, vo
   CHECK_THROWS_WITH(MultiscaleDeformer(vectors), Contains("share connectivity"));
 }
 
-TEST_CASE("multiscale: a free region that fairs into a collapsed base is reported (CGAL's cactus)",
+TEST_CASE("multiscale: CGAL's cactus runs with the default base; a collapsing faired base is refused by its cause",
           "[reconstruction][multiscale][real]") {
   const Mesh cactus = load_mesh(test::cgal_mesh("cactus.off"));
   const Region region = read_sel(test::cgal_deformation_data("cactus.sel"), static_cast<int>(cactus.n_vertices()));
+  const std::vector<Mat4> T = read_def(test::cgal_deformation_data("cactus.def"));
+  MultiscaleDeformer ms;  // low-pass base at the automatic detail scale
+  ms.prepare(cactus, region);
+  CHECK(ms.decomposition_report().warning.empty());
+  CHECK(ms.deform(T).allFinite());
+  MultiscaleOptions faired;
+  faired.base = BaseKind::Fairing;
+  for (const FairingOrder k : {FairingOrder::Membrane, FairingOrder::ThinPlate, FairingOrder::MinimumVariation}) {
+    faired.fairing = k;
+    MultiscaleDeformer f(faired);
+    CHECK_THROWS_AS(f.prepare(cactus, region), TopologyError);
+    CHECK_THROWS_WITH(f.prepare(cactus, region), Contains("fold") && Contains("curvature radius") && Contains("low-pass"));
+  }
+}
+
+TEST_CASE("multiscale: the survey cylinder keeps its radius in the base (fairing shrank it to 0.066)",
+          "[reconstruction][multiscale][real]") {
+  const std::string base = test::shared_data("survey/cylinder");
+  const Mesh mesh = load_mesh(base + ".off");
+  const Region region = read_sel(base + ".sel", static_cast<int>(mesh.n_vertices()));
   MultiscaleDeformer ms;
-  CHECK_THROWS_AS(ms.prepare(cactus, region), TopologyError);
-  CHECK_THROWS_WITH(ms.prepare(cactus, region), Contains("collapsed the base") && Contains("shell method"));
-  ShellDeformer shell;  // the direct method handles the same edit
-  shell.prepare(cactus, region);
-  CHECK(shell.deform(read_def(test::cgal_deformation_data("cactus.def"))).allFinite());
+  ms.prepare(mesh, region);
+  const Positions S = positions(mesh);
+  // The axis: the longest side of the bounding box, through its centre.
+  const Vec3 lo = S.colwise().minCoeff(), hi = S.colwise().maxCoeff(), c = (lo + hi) / 2;
+  int a = 0;
+  (hi - lo).maxCoeff(&a);
+  auto radius = [&](const Vec3& p) { Vec3 d = p - c; d[a] = 0; return d.norm(); };
+  double smallest = 1e300, largest = 0;
+  for (int v = 0; v < S.rows(); ++v) {
+    if (std::abs(S(v, a) - c[a]) > 0.4 * (hi[a] - lo[a])) continue;  // away from the caps
+    const double ratio = radius(ms.base().row(v)) / radius(S.row(v));
+    smallest = std::min(smallest, ratio);
+    largest = std::max(largest, ratio);
+  }
+  INFO("base radius / input radius in [" << smallest << ", " << largest << "], detail scale "
+                                         << ms.decomposition_report().low_pass.detail_scale);
+  CHECK(smallest >= 0.97);
+  CHECK(largest <= 1.03);
+}
+
+TEST_CASE("multiscale: every fixed and handle vertex ends exactly at p or T p, also one no face uses",
+          "[reconstruction][multiscale]") {
+  const Scene s = scene("bend120");
+  // One more vertex, labelled fixed, that no triangle uses (it has no base point).
+  Positions P(s.P.rows() + 1, 3);
+  P << s.P, Eigen::RowVector3d(0.5, 0.5, 0.3);
+  std::vector<int> codes = s.region.codes();
+  codes.push_back(Region::kFixed);
+  const Region region = Region::from_codes(codes);
+  const Mesh mesh = make_mesh(P, s.F);
+  for (const auto& enc : encoding_names()) {
+    MultiscaleOptions o;
+    o.encoding = enc;
+    MultiscaleDeformer ms(o);
+    ms.prepare(mesh, region);
+    INFO(enc);
+    for (const auto& T : {std::vector<Mat4>{Mat4::Identity()}, s.transforms}) {
+      const Positions out = ms.deform(T);
+      double err = 0;
+      for (int v : region.constrained_vertices()) {
+        const int k = region.handle_of(v);
+        err = std::max(err, (Vec3(out.row(v)) - (k < 0 ? Vec3(P.row(v)) : transform_point(T[k], P.row(v)))).norm());
+      }
+      CHECK(err == 0);
+    }
+  }
+}
+
+TEST_CASE("multiscale: the frame report counts folded triangles", "[reconstruction][multiscale]") {
+  const Scene s = scene("lift");
+  const Mesh mesh = make_mesh(s.P, s.F);
+  MultiscaleDeformer ms;
+  ms.prepare(mesh, s.region);
+  CHECK(ms.frame_report().folded_faces == -1);  // no frame yet
+  ms.deform(s.transforms);
+  CHECK(ms.frame_report().folded_faces == 0);
 }
 
 TEST_CASE("multiscale on a subdivision hierarchy: the edit runs on the coarse mesh", "[reconstruction][subdivision]") {

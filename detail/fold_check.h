@@ -1,0 +1,30 @@
+#pragma once
+//! \file The per-frame fold check of the multi-scale framework (seed 9.3.3, Fig. 9.10): where the
+//! deformed base B' curves more than 1/h, neighbouring displacements of height h cross and triangles of
+//! the reconstructed S' turn over. Each triangle of S is compared with the base triangle under it: it
+//! folded when the sign of n_S' · n_B' differs from the sign of n_S · n_B at rest.
+
+#include <vector>
+
+#include "core/types.h"
+
+namespace msd {
+
+class FoldCheck {
+ public:
+  //! S: #Vs by 3 with faces Fs; B: #Vb by 3 with faces Fb. With identical connectivity triangle t of S is
+  //! compared with triangle t of B; otherwise with the base triangle closest to its centroid (Embree).
+  //! Triangles of S or B of zero area at rest are not counted. \throw InvalidInput for an index out of range.
+  void prepare(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb);
+  //! Triangles of S' (#Vs by 3) whose orientation against B' (#Vb by 3) differs from the rest pose. O(#Fs),
+  //! parallel, allocation-free. \throw UsageError before prepare() or for wrong row counts.
+  int count(const Positions& S_deformed, const Positions& B_deformed) const;
+
+ private:
+  Faces faces_, base_faces_;
+  long num_vertices_ = -1, num_base_vertices_ = -1;
+  Eigen::VectorXi reference_;               // per triangle of S: its base triangle
+  std::vector<signed char> rest_sign_;      // sign of n_S · n_B at rest (0: not counted)
+};
+
+}  // namespace msd

@@ -1,0 +1,59 @@
+#include <catch2/catch.hpp>
+
+#include "core/errors.h"
+#include "core/scenes.h"
+#include "detail/fold_check.h"
+#include "detail/normal_displacements.h"
+#include "test_util.h"
+
+using namespace msd;
+
+TEST_CASE("fold check: a bend tighter than the bumps folds normal displacements, a gentle one does not",
+          "[detail][fold]") {
+  SceneOptions o;
+  o.resolution = 10000;
+  const Scene s = make_surface(SceneShape::Plane, o);
+  NormalDisplacements normal;
+  normal.encode(s.P, s.F, s.smooth, s.F);
+  FoldCheck folds;
+  folds.prepare(s.P, s.F, s.smooth, s.F);
+  Positions out;
+  normal.reconstruct(s.smooth, out);
+  CHECK(folds.count(out, s.smooth) == 0);
+  // The bumps on the concave side of an arc of radius R (seed 9.3.3: they cross once 1/R > 1/h).
+  for (const double R : {0.5 * s.bump_height, 10 * s.bump_height}) {
+    const double theta = 120 * M_PI / 180;
+    const test::ArcBend bend{0.45 - R * theta / 2, R, theta};
+    const Positions B1 = bend(s.smooth);
+    normal.reconstruct(B1, out);
+    const int n = folds.count(out, B1);
+    INFO("R = " << R << ": " << n << " folded triangles");
+    if (R < s.bump_height)
+      CHECK(n > 0);
+    else
+      CHECK(n == 0);
+  }
+  // A rigid motion of S' and B' together folds nothing; a mirror of S' alone turns every triangle.
+  const Mat3 R = Eigen::AngleAxisd(2.0, Vec3(1, 1, 0).normalized()).toRotationMatrix();
+  CHECK(folds.count(test::rigid_motion(s.P, R, Vec3(3, 0, 1)), test::rigid_motion(s.smooth, R, Vec3(3, 0, 1))) == 0);
+  Positions mirrored = s.P;
+  mirrored.col(0) *= -1;  // a reflection: the triangles of S' face down while the base faces up
+  CHECK(folds.count(mirrored, s.smooth) == static_cast<int>(s.F.rows()));
+}
+
+TEST_CASE("fold check: other connectivity, and misuse", "[detail][fold]") {
+  Positions P;
+  Faces F;
+  test::icosphere(3, P, F);
+  Positions Pc;
+  Faces Fc;
+  test::icosphere(1, Pc, Fc);
+  FoldCheck folds;
+  CHECK_THROWS_AS(folds.count(P, Pc), UsageError);
+  folds.prepare(1.1 * P, F, Pc, Fc);
+  CHECK(folds.count(1.1 * P, Pc) == 0);
+  Positions mirrored = 1.1 * P;
+  mirrored.col(0) *= -1;  // turns the triangles facing ±x against their base triangles
+  CHECK(folds.count(mirrored, Pc) > static_cast<int>(F.rows()) / 4);
+  CHECK_THROWS_AS(folds.count(P, P), UsageError);
+}

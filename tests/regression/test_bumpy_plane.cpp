@@ -4,18 +4,13 @@
 // explain the change in the commit that updates the file.
 #include <catch2/catch.hpp>
 
-#include <cstdlib>
-#include <fstream>
-#include <map>
-#include <sstream>
-
 #include "analysis/comparison.h"
 #include "analysis/self_intersections.h"
-#include "core/atomic_file.h"
 #include "core/scenes.h"
 #include "detail/deformation_transfer.h"
 #include "detail/displacement_volumes.h"
 #include "detail/normal_displacements.h"
+#include "golden.h"
 #include "test_util.h"
 
 using namespace msd;
@@ -48,13 +43,6 @@ const MethodResult& result(const std::string& scene, const std::string& method) 
   throw;
 }
 
-// The compared metrics of a result, by column name.
-std::map<std::string, double> metrics(const MethodResult& r) {
-  return {{"rigidity_mean", r.rigidity.mean},     {"rigidity_p95", r.rigidity.p95},
-          {"distortion_mean", r.distortion.mean}, {"distortion_p95", r.distortion.p95},
-          {"self_intersections", double(r.self_intersections)}};
-}
-
 std::string golden_path() { return test::test_data("golden_metrics.csv"); }
 
 }  // namespace
@@ -69,40 +57,7 @@ TEST_CASE("regression: every method runs on every scene and meets its handles", 
 }
 
 TEST_CASE("regression: metrics match the golden values", "[regression]") {
-  if (std::getenv("MSD_UPDATE_GOLDEN")) {
-    std::string csv = "scene,method,metric,value\n";
-    for (const auto& r : comparison())
-      for (const auto& [name, value] : metrics(r)) {
-        std::ostringstream line;
-        line.precision(10);
-        line << r.scene << ',' << r.method << ',' << name << ',' << value << '\n';
-        csv += line.str();
-      }
-    write_file_atomically(golden_path(), csv);
-    WARN("re-recorded " << golden_path());
-    return;
-  }
-  std::ifstream in(golden_path());
-  REQUIRE(in.good());
-  std::string line;
-  std::getline(in, line);  // header
-  int compared = 0;
-  while (std::getline(in, line)) {
-    std::istringstream cells(line);
-    std::string scene, method, metric, value;
-    std::getline(cells, scene, ',');
-    std::getline(cells, method, ',');
-    std::getline(cells, metric, ',');
-    std::getline(cells, value, ',');
-    const double golden = std::stod(value), now = metrics(result(scene, method)).at(metric);
-    INFO(scene << " / " << method << " / " << metric << ": golden " << golden << ", now " << now);
-    if (metric == "self_intersections")
-      CHECK(std::abs(now - golden) <= std::max(3.0, 0.05 * golden));  // counts near contact can flip
-    else
-      CHECK(std::abs(now - golden) <= 0.03 * std::abs(golden) + 1e-4);
-    ++compared;
-  }
-  CHECK(compared == static_cast<int>(comparison().size() * 5));
+  test::check_golden(golden_path(), comparison());
 }
 
 TEST_CASE("regression: Fig. 9.5, linear shell loses the details' orientation, multi-scale keeps it", "[regression]") {

@@ -40,7 +40,12 @@ class LowPassSystem {
       mass_[v] = std::max(mass_[v], floor);
       (boundary[v] ? known_ : unknown_).push_back(v);
     }
-    bending_ = lap.W * inverse.asDiagonal() * lap.W;
+    const SparseMatrix bending = lap.W * inverse.asDiagonal() * lap.W;
+    bending_uu_ = submatrix(bending, unknown_, unknown_);
+    if (!known_.empty()) bending_uk_ = submatrix(bending, unknown_, known_);
+    Eigen::VectorXd mass_u(static_cast<Eigen::Index>(unknown_.size()));
+    for (size_t u = 0; u < unknown_.size(); ++u) mass_u[u] = mass_[unknown_[u]];
+    mass_uu_ = SparseMatrix(mass_u.asDiagonal());
     centroid_ = S.colwise().mean();
     centred_ = S.rowwise() - centroid_.transpose();
     known_values_.resize(static_cast<Eigen::Index>(known_.size()), 3);
@@ -49,9 +54,7 @@ class LowPassSystem {
 
   Positions solve(double detail_scale) {
     const double l = detail_scale / (2 * kPi), l4 = l * l * l * l;
-    SparseMatrix A = l4 * bending_;
-    A += SparseMatrix(mass_.asDiagonal());
-    const SparseMatrix Auu = submatrix(A, unknown_, unknown_);
+    const SparseMatrix Auu = l4 * bending_uu_ + mass_uu_;  // the mass is 0 off the diagonal of (u, k)
     try {
       if (solver_.factored())
         solver_.refactor(Auu);
@@ -66,7 +69,7 @@ class LowPassSystem {
     }
     Eigen::MatrixXd rhs(static_cast<Eigen::Index>(unknown_.size()), 3), X;
     for (size_t u = 0; u < unknown_.size(); ++u) rhs.row(u) = mass_[unknown_[u]] * centred_.row(unknown_[u]);
-    if (!known_.empty()) rhs -= submatrix(A, unknown_, known_) * known_values_;
+    if (!known_.empty()) rhs -= l4 * (bending_uk_ * known_values_);
     solver_.solve(rhs, X);
     if (!X.allFinite()) throw SolverError(std::string(kWho) + ": the smoothed positions are not finite");
     Positions B(centred_.rows(), 3);
@@ -77,7 +80,7 @@ class LowPassSystem {
 
  private:
   Eigen::VectorXd mass_;
-  SparseMatrix bending_;
+  SparseMatrix bending_uu_, bending_uk_, mass_uu_;  // W M̃⁻¹ W and M on (unknown, unknown), (unknown, known)
   Vec3 centroid_;
   Positions centred_;
   std::vector<int> known_, unknown_;  // mesh-boundary vertices (B = S) and the others
@@ -118,7 +121,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
     r.check = check_details(S, B, F);
   } else {
     r.automatic = true;
-    const double smallest = 2 * r.mean_edge_length, largest = options.max_scale_fraction * diameter(S);
+    const double smallest = 4 * r.mean_edge_length, largest = options.max_scale_fraction * diameter(S);
     const double area = face_areas(S, F).sum();
     const long allowed_folds = static_cast<long>(kDefectFraction * static_cast<double>(S.rows()));
     double previous_rms = 0;

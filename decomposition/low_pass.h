@@ -36,7 +36,7 @@ struct LowPassOptions {
   //! candidate whose rms detail height is less than this factor times the previous candidate's (one
   //! √2 step of L earlier). > 1.
   double plateau_growth = 1.25;
-  //! Automatic choice: candidates are L = 2h̄·√2^k (h̄ the mean edge length), k = 0, 1, …, up to this
+  //! Automatic choice: candidates are L = 4h̄·√2^k (h̄ the mean edge length), k = 0, 1, …, up to this
   //! fraction of the diameter of S (twice the largest distance from the centroid: unlike the bounding
   //! box, it does not change when S turns). > 0.
   double max_scale_fraction = 0.6;

@@ -88,7 +88,7 @@ TEST_CASE("real meshes load with the right counts", "[core][io][real]") {
   CHECK(knight.row(0) == Eigen::RowVector3d(x, y, z));
 }
 
-TEST_CASE("polygons are triangulated; non-manifold faces are detached and reported", "[core][io]") {
+TEST_CASE("polygons are triangulated, non-manifold faces are detached and reported", "[core][io]") {
   test::TempDir tmp;
   std::ofstream(tmp.file("quad.obj")) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
   LoadReport report;

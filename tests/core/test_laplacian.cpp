@@ -69,7 +69,7 @@ TEST_CASE("cotan Laplacian of a sphere approximates -2H n, better with refinemen
   CHECK(previous < 0.01);
 }
 
-TEST_CASE("gradient of a linear function is exact; divergence of gradient is W", "[core][laplacian]") {
+TEST_CASE("gradient of a linear function is exact, divergence of gradient is W", "[core][laplacian]") {
   Positions P;
   Faces F;
   test::icosphere(2, P, F);

@@ -72,7 +72,7 @@ TEST_CASE("low-pass base: moves with S under rigid motions and scaling", "[decom
   CHECK(test::max_row_distance(B1, test::rigid_motion(B0 * scale, R, t)) <= 1e-8 * bounding_box_diagonal(S1));
 }
 
-TEST_CASE("low-pass base: a given scale is used as is; bad options are refused", "[decomposition][low-pass]") {
+TEST_CASE("low-pass base: a given scale is used as is, bad options are refused", "[decomposition][low-pass]") {
   SceneOptions o;
   o.resolution = 3000;
   const Scene s = make_surface(SceneShape::Plane, o);

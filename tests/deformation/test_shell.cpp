@@ -100,7 +100,7 @@ TEST_CASE("shell: the result solves (9.6) at free vertices and meets every const
   }
 }
 
-TEST_CASE("shell: translations move everything rigidly; rigid motions do on a flat interior region", "[deformation][shell]") {
+TEST_CASE("shell: translations move everything rigidly, rigid motions do on a flat interior region", "[deformation][shell]") {
   SECTION("translation of all constraints, bumpy plane") {
     const Scene s = small_scene("lift");
     Region both = s.region;

@@ -174,7 +174,7 @@ TEST_CASE("multiscale: a remeshed base (CGAL isotropic remeshing) for normal, vo
   CHECK_THROWS_WITH(MultiscaleDeformer(vectors), Contains("share connectivity"));
 }
 
-TEST_CASE("multiscale: CGAL's cactus runs with the default base; a collapsing faired base is refused by its cause",
+TEST_CASE("multiscale: CGAL's cactus runs with the default base, and a collapsing faired base is refused by its cause",
           "[reconstruction][multiscale][real]") {
   const Mesh cactus = load_mesh(test::cgal_mesh("cactus.off"));
   const Region region = read_sel(test::cgal_deformation_data("cactus.sel"), static_cast<int>(cactus.n_vertices()));

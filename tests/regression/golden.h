@@ -23,14 +23,18 @@ inline std::map<std::string, double> golden_metrics(const MethodResult& r) {
           {"self_intersections", double(r.self_intersections)}};
 }
 
+//! The result of `method` on `scene`; fails the test when there is none.
+inline const MethodResult& find_result(const std::vector<MethodResult>& results, const std::string& scene,
+                                       const std::string& method) {
+  for (const auto& r : results)
+    if (r.scene == scene && r.method == method) return r;
+  FAIL("no result for " << scene << " / " << method);
+  throw;
+}
+
 //! Compares every ok result with the table at `path` (rigidity and distortion within 3 %, self-intersection
 //! counts within max(3, 5 %): counts near contact can flip), or re-records it under MSD_UPDATE_GOLDEN.
 inline void check_golden(const std::string& path, const std::vector<MethodResult>& results) {
-  auto find = [&](const std::string& scene, const std::string& method) -> const MethodResult* {
-    for (const auto& r : results)
-      if (r.scene == scene && r.method == method && r.ok) return &r;
-    return nullptr;
-  };
   if (std::getenv("MSD_UPDATE_GOLDEN")) {
     std::string csv = "scene,method,metric,value\n";
     for (const auto& r : results)
@@ -57,10 +61,10 @@ inline void check_golden(const std::string& path, const std::vector<MethodResult
     std::getline(cells, method, ',');
     std::getline(cells, metric, ',');
     std::getline(cells, value, ',');
-    const MethodResult* r = find(scene, method);
-    INFO(scene << " / " << method << " has no successful result");
-    REQUIRE(r != nullptr);
-    const double golden = std::stod(value), now = golden_metrics(*r).at(metric);
+    const MethodResult& r = find_result(results, scene, method);
+    INFO(scene << " / " << method << ": " << r.error);
+    REQUIRE(r.ok);
+    const double golden = std::stod(value), now = golden_metrics(r).at(metric);
     INFO(scene << " / " << method << " / " << metric << ": golden " << golden << ", now " << now);
     if (metric == "self_intersections")
       CHECK(std::abs(now - golden) <= std::max(3.0, 0.05 * golden));

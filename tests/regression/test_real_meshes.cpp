@@ -108,10 +108,7 @@ const std::vector<MethodResult>& comparison() {
 }
 
 const MethodResult& result(const std::string& scene, const std::string& method) {
-  for (const auto& r : comparison())
-    if (r.scene == scene && r.method == method) return r;
-  FAIL("no result for " << scene << " / " << method);
-  throw;
+  return test::find_result(comparison(), scene, method);
 }
 
 }  // namespace

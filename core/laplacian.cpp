@@ -57,14 +57,13 @@ CotanLaplacian cotan_laplacian(const Positions& P, const Faces& F) {
       ++out.degenerate_faces;
       continue;
     }
+    // A needle's three cotangents are scaled together, so that the largest is ±kMaxCotangent: a triangle's
+    // weights stay positive semi-definite only as a whole (clamping (K', K', −K') one by one gives (K, K, −K)).
+    const double largest = std::max({std::abs(t.cot[0]), std::abs(t.cot[1]), std::abs(t.cot[2])});
+    const double scale = largest > CotanLaplacian::kMaxCotangent ? CotanLaplacian::kMaxCotangent / largest : 1.0;
+    out.clamped_cotangents += t.needle_corners;
     double cot[3];
-    for (int k = 0; k < 3; ++k) {
-      cot[k] = t.cot[k];
-      if (std::abs(cot[k]) > CotanLaplacian::kMaxCotangent) {
-        cot[k] = std::copysign(CotanLaplacian::kMaxCotangent, cot[k]);
-        ++out.clamped_cotangents;
-      }
-    }
+    for (int k = 0; k < 3; ++k) cot[k] = scale * t.cot[k];
     for (int k = 0; k < 3; ++k) {
       // The angle at corner k is opposite the edge (k+1, k+2).
       const int i = F(f, (k + 1) % 3), j = F(f, (k + 2) % 3);

@@ -15,7 +15,10 @@ struct CotanLaplacian {
   //! #V mixed-Voronoi vertex areas (Meyer et al. 2003); they sum to the surface area.
   Eigen::VectorXd mass;
   int degenerate_faces = 0;    //!< faces of (near) zero area, left out of W and the mass
-  int clamped_cotangents = 0;  //!< needle angles whose cotangent was clamped to ±kMaxCotangent
+  //! Needle angles, |cot| > kMaxCotangent. Their triangle's three cotangents are scaled together so the
+  //! largest is ±kMaxCotangent: the triangle's weights stay positive semi-definite (clamping one by one
+  //! turns a needle's (K', K', −K') into the indefinite (K, K, −K)).
+  int clamped_cotangents = 0;
   static constexpr double kMaxCotangent = 1e5;
 };
 
@@ -27,7 +30,8 @@ struct TriangleCotangents {
   //! Twice the area at most 2 · kDegenerateAreaRatio · (longest edge)², or not a number: cotan_laplacian()
   //! leaves the face out (cot stays 0).
   bool degenerate = false;
-  //! Corners with |cot| > CotanLaplacian::kMaxCotangent (cotan_laplacian() clamps them): a needle.
+  //! Corners with |cot| > CotanLaplacian::kMaxCotangent (cotan_laplacian() scales the triangle's cotangents
+  //! down together): a needle.
   int needle_corners = 0;
   static constexpr double kDegenerateAreaRatio = 1e-14;
 };

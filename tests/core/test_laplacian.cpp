@@ -1,5 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include <Eigen/Eigenvalues>
+#include <random>
+
 #include "core/laplacian.h"
 #include "core/mesh_io.h"
 #include "core/scenes.h"
@@ -118,4 +121,25 @@ TEST_CASE("uniform Laplacian: rows sum to zero, diagonal is minus the degree", "
   CHECK((W * Eigen::VectorXd::Ones(P.rows())).cwiseAbs().maxCoeff() == 0.0);
   // Icosahedron vertices have degree 5, edge midpoints degree 6.
   for (int i = 0; i < P.rows(); ++i) REQUIRE(-W.coeff(i, i) == (i < 12 ? 5.0 : 6.0));
+}
+
+TEST_CASE("cotan Laplacian: negative semi-definite for any triangle, needles included", "[core][laplacian]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Faces F(1, 3);
+  F << 0, 1, 2;
+  for (int trial = 0; trial < 2000; ++trial) {
+    Positions P(3, 3);
+    for (int i = 0; i < 3; ++i) P.row(i) = Vec3(u(rng), u(rng), u(rng)).transpose();
+    if (trial % 2 == 1) {  // a needle: the third corner almost on the first edge, or two corners almost together
+      const double t = trial % 4 == 1 ? 0.5 : 1e-9;
+      P.row(2) = (1 - t) * P.row(0) + t * P.row(1) + 1e-8 * Eigen::RowVector3d(u(rng), u(rng), u(rng));
+    }
+    const CotanLaplacian L = cotan_laplacian(P, F);
+    const Eigen::Matrix3d W = Eigen::MatrixXd(L.W);
+    const double largest = W.cwiseAbs().maxCoeff();
+    const Eigen::Vector3d eig = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(W).eigenvalues();
+    INFO("trial " << trial << ", eigenvalues " << eig.transpose());
+    CHECK(eig.maxCoeff() <= 1e-9 * std::max(largest, 1.0));
+  }
 }

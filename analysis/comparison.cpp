@@ -108,23 +108,28 @@ struct Column {
 
 std::vector<Column> columns() {
   auto g = [](double x) { return format("%.4g", x); };
+  // A measured column: empty for a failed run, which has no figures (a 0 there would read as perfect).
+  using Value = std::function<std::string(const MethodResult&)>;
+  auto measured = [](Value f) -> Value { return [f](const MethodResult& r) { return r.ok ? f(r) : std::string(); }; };
+  auto count = [](int n) { return n < 0 ? std::string("n/a") : std::to_string(n); };
   return {
       {"scene", [](const MethodResult& r) { return r.scene; }},
       {"method", [](const MethodResult& r) { return r.method; }},
       {"vertices", [](const MethodResult& r) { return std::to_string(r.vertices); }},
       {"ok", [](const MethodResult& r) { return std::string(r.ok ? "yes" : "no"); }},
-      {"prepare_ms", [=](const MethodResult& r) { return g(r.prepare_ms); }},
-      {"frame_ms", [=](const MethodResult& r) { return g(r.frame_ms); }},
-      {"handle_error", [=](const MethodResult& r) { return g(r.handle_error); }},
-      {"rigidity_mean", [=](const MethodResult& r) { return g(r.rigidity.mean); }},
-      {"rigidity_p95", [=](const MethodResult& r) { return g(r.rigidity.p95); }},
-      {"rigidity_max", [=](const MethodResult& r) { return g(r.rigidity.max); }},
-      {"distortion_mean", [=](const MethodResult& r) { return g(r.distortion.mean); }},
-      {"distortion_p95", [=](const MethodResult& r) { return g(r.distortion.p95); }},
-      {"distortion_max", [=](const MethodResult& r) { return g(r.distortion.max); }},
-      {"self_intersections", [](const MethodResult& r) { return std::to_string(r.self_intersections); }},
-      {"folded_faces", [](const MethodResult& r) { return std::to_string(r.folded_faces); }},
-      {"volume_change", [=](const MethodResult& r) { return r.volume_change ? g(*r.volume_change) : std::string("n/a"); }},
+      {"prepare_ms", measured([=](const MethodResult& r) { return g(r.prepare_ms); })},
+      {"frame_ms", measured([=](const MethodResult& r) { return g(r.frame_ms); })},
+      {"handle_error", measured([=](const MethodResult& r) { return g(r.handle_error); })},
+      {"rigidity_mean", measured([=](const MethodResult& r) { return g(r.rigidity.mean); })},
+      {"rigidity_p95", measured([=](const MethodResult& r) { return g(r.rigidity.p95); })},
+      {"rigidity_max", measured([=](const MethodResult& r) { return g(r.rigidity.max); })},
+      {"distortion_mean", measured([=](const MethodResult& r) { return g(r.distortion.mean); })},
+      {"distortion_p95", measured([=](const MethodResult& r) { return g(r.distortion.p95); })},
+      {"distortion_max", measured([=](const MethodResult& r) { return g(r.distortion.max); })},
+      {"self_intersections", measured([=](const MethodResult& r) { return count(r.self_intersections); })},
+      // Multi-scale methods count the triangles that folded over the deformed base; others do not (n/a).
+      {"folded_faces", measured([=](const MethodResult& r) { return count(r.folded_faces); })},
+      {"volume_change", measured([=](const MethodResult& r) { return r.volume_change ? g(*r.volume_change) : std::string("n/a"); })},
       {"message", [](const MethodResult& r) { return r.ok ? r.warning : r.error; }},  // error, or warning
   };
 }

@@ -8,6 +8,7 @@
 #include <CGAL/Surface_mesh.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,19 @@ RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_
   for (Eigen::Index v = 0; v < P.rows(); ++v)
     if (!P.row(v).allFinite())
       throw InvalidInput(who + ": vertex " + std::to_string(v) + " has a non-finite coordinate");
+  // Equilateral triangles of the target edge cover the area in about area / (√3/4 · edge²) of them.
+  double area = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    if (F.row(f).minCoeff() >= 0 && F.row(f).maxCoeff() < P.rows())
+      area += 0.5 * (P.row(F(f, 1)) - P.row(F(f, 0))).cross(P.row(F(f, 2)) - P.row(F(f, 0))).norm();
+  const double expected = area / (0.4330127018922193 * target_edge_length * target_edge_length);
+  if (expected > kMaxRemeshTriangles) {
+    char text[200];
+    std::snprintf(text, sizeof text, ": edge length %g would make about %.3g triangles (at most %.3g are allowed); "
+                  "use an edge length of at least %.3g", target_edge_length, expected, kMaxRemeshTriangles,
+                  std::sqrt(area / (0.4330127018922193 * kMaxRemeshTriangles)));
+    throw InvalidInput(who + text);
+  }
 
   SurfaceMesh mesh;
   mesh.reserve(static_cast<SurfaceMesh::size_type>(P.rows()),

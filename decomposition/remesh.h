@@ -21,9 +21,14 @@ struct RemeshResult {
 //! (CGAL split_long_edges), then every border edge is constrained and protected, so the border vertices
 //! stay where they are and the outline of an open mesh is unchanged (border edges shorter than the target
 //! are kept as they are; the triangles next to them are smaller).
-//! \throw InvalidInput if target_edge_length is not finite and positive, iterations < 0, F indexes out of
+//! At most kMaxRemeshTriangles (20 million, about 6 GB in CGAL's structures) are made: an edge length
+//! whose estimated output (area / (√3/4 · edge²)) exceeds it is refused before any work, with the
+//! smallest edge length allowed.
+//! \throw InvalidInput if target_edge_length is not finite and positive or too small (above), iterations < 0, F indexes out of
 //! range or repeats a vertex in a face, a coordinate is not finite, or a face makes the surface
 //! non-manifold (the message names the face); SolverError if CGAL reports a failure.
+constexpr double kMaxRemeshTriangles = 2e7;
+
 RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_edge_length,
                               int iterations = 3);
 

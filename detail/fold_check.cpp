@@ -53,7 +53,7 @@ int FoldCheck::count(const Positions& S_deformed, const Positions& B_deformed) c
     int n = 0;
     for (long f = begin; f < end; ++f)
       if (rest_sign_[f] != 0)
-        n += orientation(S_deformed, &faces_(f, 0), B_deformed, &base_faces_(reference_[f], 0)) != rest_sign_[f];
+        n += orientation(S_deformed, &faces_(f, 0), B_deformed, &base_faces_(reference_[f], 0)) == -rest_sign_[f];
     folded += n;
   });
   return folded;

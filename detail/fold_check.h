@@ -2,7 +2,8 @@
 //! \file The per-frame fold check of the multi-scale framework (seed 9.3.3, Fig. 9.10): where the
 //! deformed base B' curves more than 1/h, neighbouring displacements of height h cross and triangles of
 //! the reconstructed S' turn over. Each triangle of S is compared with the base triangle under it: it
-//! folded when the sign of n_S' · n_B' differs from the sign of n_S · n_B at rest.
+//! folded when the sign of n_S' · n_B' is the opposite of the sign of n_S · n_B at rest (a triangle that
+//! collapsed to zero area has no normal and is not counted).
 
 #include <vector>
 

@@ -1,9 +1,11 @@
 #include "reconstruction/multiscale.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "core/errors.h"
+#include "core/laplacian.h"
 #include "decomposition/remesh.h"
 #include "detail/closest_point.h"
 #include "detail/deformation_transfer.h"
@@ -27,6 +29,9 @@ std::unique_ptr<DetailEncoding> make_encoding(const std::string& name) {
 
 namespace {
 
+// A base with less than this fraction of S's area around the free region has lost the shape.
+constexpr double kMinBaseAreaRatio = 0.5;
+
 // Roles on a remeshed base: every triangle that holds the closest point of a fixed or handle vertex of
 // S gets that vertex's role on all its corners, so those vertices' base points move exactly with their
 // handle (or stay); all other base vertices are free.
@@ -40,33 +45,74 @@ Region transfer_region(const Positions& S, const Region& region, const Positions
   return Region::from_codes(std::move(codes));
 }
 
-// Refuses a base the details fold over at rest (beyond a few defect vertices), naming the cause and a
-// remedy; returns a warning when a few vertices fold or the details stand tall against the base.
+// What to change when the decomposition is refused or warned about.
+std::string remedy(const DecompositionReport& r) {
+  if (r.base == BaseKind::Fairing)
+    return "fairing the free region removed the shape with the details (the free region is large or tube-like "
+           "next to the shape); use the low-pass base (--base low-pass, the default), which keeps the shape, or a "
+           "smaller free region";
+  if (!r.low_pass.automatic) {
+    char text[160];
+    std::snprintf(text, sizeof text, "the detail scale %g is too large for this shape; use a smaller one, or 0 to "
+                  "choose it automatically", r.low_pass.detail_scale);
+    return text;
+  }
+  return "the mesh has defects there (slivers or near-duplicate vertices); repair them, or set a smaller detail scale";
+}
+
+// Refuses a base that lost the shape (less than half the area of S where S is free to move) or that the
+// details fold over at rest (beyond a few defect vertices), naming the cause and a remedy; returns a warning
+// when a few vertices fold or the details come close to folding.
 std::string check_decomposition(const DecompositionReport& r, const MultiscaleOptions& o, long num_vertices) {
+  if (r.area_ratio < kMinBaseAreaRatio) {
+    char text[200];
+    std::snprintf(text, sizeof text, "multiscale: the base lost the shape (its area around the free region is %.3g "
+                  "of the input's; the details would be the shape itself): ", r.area_ratio);
+    throw TopologyError(text + remedy(r));
+  }
   const DetailCheck& c = r.check;
   const bool folds = c.folding_vertices > 0, tall = c.fold_ratio_p999 > o.low_pass.max_fold_ratio;
   if (!folds && !tall) return {};
   char where[200];
-  std::snprintf(where, sizeof where, "near vertex %d the detail height %.3g reaches %.0f%% of the base's curvature radius %.3g",
-                c.worst_vertex, c.worst_height, 100 * c.max_fold_ratio, c.worst_radius);
-  std::string remedy;
-  if (r.base == BaseKind::Fairing)
-    remedy = "fairing the free region removed the shape with the details (the free region is large or tube-like "
-             "next to the shape); use the low-pass base (BaseKind::LowPass, CLI --base low-pass), which keeps the "
-             "shape, or a smaller free region";
-  else if (!r.low_pass.automatic)
-    remedy = "the detail scale " + std::to_string(r.low_pass.detail_scale) +
-             " is too large for this shape; use a smaller one, or 0 to choose it automatically";
-  else
-    remedy = "the mesh has defects there (slivers or near-duplicate vertices); repair them, or set a smaller detail scale";
+  std::snprintf(where, sizeof where, "near vertex %d the detail height %.3g is %.3g times the base's curvature radius %.3g",
+                c.worst_vertex, c.worst_height, c.max_fold_ratio, c.worst_radius);
   if (c.folding_vertices > static_cast<long>(1e-3 * static_cast<double>(num_vertices)))
     throw TopologyError("multiscale: the details fold over at rest (" + std::to_string(c.folding_vertices) +
-                        " vertices with a height above the base's curvature radius; " + where + "): " + remedy);
+                        " vertices with a height above the base's curvature radius; " + where + "): " + remedy(r));
   if (folds)
     return "multiscale: the details of " + std::to_string(c.folding_vertices) + " vertices fold over at rest (" +
-           where + "): " + remedy;
+           where + "): " + remedy(r);
   return std::string("multiscale: the details come close to folding over the base (") + where +
-         "); an edit that bends the base further may fold them: " + remedy;
+         "); an edit that bends the base further may fold them: " + remedy(r);
+}
+
+// A remeshed base must stay as close to S as B is (up to 1 % of the diagonal): an edge length beyond the
+// base's curvature radius cuts the shape (measured: edge 2 on the survey cylinder of radius 1 folds 765
+// triangles).
+void check_remeshed_base(const Positions& S, const RemeshResult& r, DecompositionReport& report, double edge) {
+  report.remeshed_vertices = static_cast<int>(r.P.rows());
+  const ClosestPointQuery query(r.P, r.F);
+  double far = 0;
+  for (const ClosestPoint& c : query.query_all(S)) far = std::max(far, std::sqrt(c.squared_distance));
+  const double allowed = std::max(2 * report.check.max_height, 0.01 * bounding_box_diagonal(S));
+  if (!(far <= allowed)) {
+    char text[300];
+    std::snprintf(text, sizeof text, "multiscale: the base remeshed to edge length %g (%d vertices) lies up to %.3g "
+                  "from the input, more than %.3g (twice the detail height, or 1 %% of the diagonal): the edges are "
+                  "too long for the shape; use a smaller --remesh-base", edge, report.remeshed_vertices, far, allowed);
+    throw InvalidInput(text);
+  }
+}
+
+// Area of B over the area of S on the triangles with a free vertex (all of them when none is free).
+double free_area_ratio(const Positions& S, const Positions& B, const Faces& F, const Region& region) {
+  double rest = 0, base = 0;
+  const Eigen::VectorXd a = face_areas(S, F), b = face_areas(B, F);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    if (region.code(F(f, 0)) == Region::kFree || region.code(F(f, 1)) == Region::kFree ||
+        region.code(F(f, 2)) == Region::kFree)
+      rest += a[f], base += b[f];
+  return rest > 0 ? base / rest : a.sum() > 0 ? b.sum() / a.sum() : 1.0;
 }
 
 }  // namespace
@@ -98,11 +144,13 @@ void MultiscaleDeformer::do_prepare(const Mesh& mesh, const Region& region) {
     base_ = fair_region(mesh, region, fairing);
     decomposition_.check = check_details(S, base_, F);
   }
+  decomposition_.area_ratio = free_area_ratio(S, base_, F, region);
   decomposition_.warning = check_decomposition(decomposition_, options_, S.rows());
   base_faces_ = F;
   Region base_region = region;
   if (options_.remesh_base_edge_length > 0) {
     RemeshResult r = remesh_isotropic(base_, F, options_.remesh_base_edge_length);
+    check_remeshed_base(S, r, decomposition_, options_.remesh_base_edge_length);
     base_region = transfer_region(S, region, r.P, r.F);
     base_ = std::move(r.P);
     base_faces_ = std::move(r.F);

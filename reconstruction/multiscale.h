@@ -48,6 +48,10 @@ struct DecompositionReport {
   BaseKind base = BaseKind::LowPass;
   LowPassReport low_pass;  //!< BaseKind::LowPass: the scale used and the candidates tried
   DetailCheck check;       //!< details against the base's curvature radii (S's connectivity)
+  //! Area of B over the area of S on the triangles that touch a free vertex; below 0.5 the base lost the
+  //! shape (a faired cylinder: 0.05) and prepare() refuses it.
+  double area_ratio = 1;
+  int remeshed_vertices = 0;  //!< vertices of the remeshed base (MultiscaleOptions::remesh_base_edge_length > 0)
   //! Non-empty when a few vertices' details fold at rest (at most 0.1 % of them: mesh defects) or the
   //! details stand taller than LowPassOptions::max_fold_ratio of the base's curvature radius: the
   //! edit may fold them; says what to change.
@@ -62,10 +66,13 @@ std::vector<std::string> encoding_names();
 std::unique_ptr<DetailEncoding> make_encoding(const std::string& name);
 
 //! prepare(): B from S (options().base), the fold check, the shell operator on B, D = S ⊖ B.
-//! \throw TopologyError when the details fold at rest on more than 0.1 % of the vertices (fold ratio ≥ 1:
+//! \throw TopologyError when the base lost the shape (DecompositionReport::area_ratio < 0.5) or the
+//! details fold at rest on more than 0.1 % of the vertices (fold ratio ≥ 1:
 //! displacements taller than the base's curvature radius), naming a vertex, the height, the radius and a
 //! remedy; SolverError from the
 //! shell operator is reported as a fault of the base B, not of the input.
+//! InvalidInput when a remeshed base lies farther from S than twice the detail height (or 1 % of the
+//! diagonal): its edges are too long for the shape.
 //! deform(): B' from the shell, S' = B' ⊕ D, then every fixed and handle vertex of S is placed exactly at
 //! p or T_k p (whatever the encoding, and whether or not it has a base point); frame_report().folded_faces
 //! counts the triangles of S' whose normal turned against B''s.

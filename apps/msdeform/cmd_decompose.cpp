@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "apps/msdeform/commands.h"
+#include "apps/msdeform/deformers.h"
 #include "apps/msdeform/edit_case.h"
 #include "core/errors.h"
 #include "core/mesh_io.h"
@@ -41,7 +42,7 @@ void add_decompose_command(CLI::App& app) {
   cmd->add_option("--detail-scale", low_pass->detail_scale,
                   "low-pass: features shorter than this length are details; 0 chooses it from the detail heights (where "
                   "they stop growing with the scale; no detail layer: the base is the mesh)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(nonnegative_length())
       ->capture_default_str();
   cmd->add_option("--fairing", *order, "--base fairing: order k, 1 membrane, 2 thin plate, 3 minimum variation")
       ->check(CLI::Range(1, 3))
@@ -81,7 +82,7 @@ void add_decompose_command(CLI::App& app) {
       std::printf("  base: fairing of order %d of the free region\n", *order);
     } else {
       if (report.detail_scale > 0)
-        std::printf("  base: low-pass at detail scale %.4g (%s; mean edge length %.4g)\n", report.detail_scale,
+        std::printf("  base: low-pass at detail scale %.10g (%s; mean edge length %.4g)\n", report.detail_scale,
                     report.automatic ? "chosen automatically" : "given", report.mean_edge_length);
       else
         std::printf("  base: the mesh itself: the detail heights grow with every scale tried, so there is no separate "

@@ -15,6 +15,19 @@ namespace msd::cli {
 namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+// What to change when a multi-scale frame folded triangles over its base.
+std::string fold_advice(const Deformer& deformer) {
+  const auto* ms = dynamic_cast<const MultiscaleDeformer*>(&deformer);
+  if (!ms) return "the edit is too strong for this method";
+  if (ms->options().base == BaseKind::Fairing) return "use the low-pass base (--base low-pass, the default)";
+  const std::string& e = ms->options().encoding;
+  const std::string smaller = ms->decomposition_report().low_pass.automatic
+                                  ? "set a --detail-scale below the automatic one"
+                                  : "use a smaller --detail-scale";
+  if (e == "normal" || e == "vectors") return "try --encoding transfer or volumes, or " + smaller;
+  return smaller;
+}
+
 }  // namespace
 
 void add_deform_command(CLI::App& app) {
@@ -59,8 +72,14 @@ void add_deform_command(CLI::App& app) {
     if (report.folded_faces >= 0) {
       std::printf("  folded triangles (normal turned against the deformed base's): %d\n", report.folded_faces);
       if (report.folded_faces > 0)
-        std::fprintf(stderr, "warning: %d triangles of the result folded over; try --encoding volumes or transfer, "
-                     "or a smaller --detail-scale\n", report.folded_faces);
+        std::fprintf(stderr, "warning: %d triangles of the result folded over the deformed base: %s\n",
+                     report.folded_faces, fold_advice(*deformer).c_str());
+    }
+    for (size_t k = 0; k < c.transforms.size(); ++k) {
+      const double det = c.transforms[k].topLeftCorner<3, 3>().determinant();
+      if (!(det > 0))
+        std::fprintf(stderr, "warning: the transform of handle %zu is %s (determinant %.3g): it turns the handle "
+                     "inside out\n", k, det < 0 ? "a reflection" : "singular", det);
     }
     std::printf("  wrote %s\n", output->c_str());
   });

@@ -1,5 +1,7 @@
 #include "apps/msdeform/deformers.h"
 
+#include <cmath>
+#include <cstdlib>
 #include <map>
 
 #include "reconstruction/multiscale.h"
@@ -13,6 +15,18 @@ std::string joined(const std::vector<std::string>& names, const char* sep) {
   return out;
 }
 }  // namespace
+
+CLI::Validator nonnegative_length() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(text.c_str(), &end);
+        if (text.empty() || *end != '\0') return "'" + text + "' is not a number";
+        if (!std::isfinite(x) || x < 0) return "'" + text + "' must be a finite length >= 0";
+        return {};
+      },
+      "LENGTH>=0");
+}
 
 void DeformerOptions::add_to(CLI::App& cmd) {
   cmd.add_option("--method", method, "Editing method: shell|propagate|multiscale (with --encoding), or a full name: " +
@@ -59,14 +73,14 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   ms->add_option("--detail-scale", options.low_pass.detail_scale,
                  "low-pass base: features shorter than this length (mesh units) are details; 0 chooses it from the "
                  "detail heights (where they stop growing with the scale; no detail layer: the base is the mesh)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(nonnegative_length())
       ->capture_default_str();
   ms->add_option("--fairing", fairing_order, "--base fairing: order 1 membrane, 2 thin plate, 3 minimum variation")
       ->check(CLI::Range(1, 3))
       ->capture_default_str();
   ms->add_option("--remesh-base", options.remesh_base_edge_length,
                  "remesh the base isotropically to this edge length before encoding (0: keep S's triangles)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(nonnegative_length())
       ->capture_default_str();
 }
 

@@ -10,6 +10,9 @@
 
 namespace msd::cli {
 
+// Checks that an option is a finite length >= 0, naming the option.
+CLI::Validator nonnegative_length();
+
 struct DeformerOptions {
   std::string method = "shell";
   std::string encoding = "normal";

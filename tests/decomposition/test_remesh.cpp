@@ -133,3 +133,13 @@ TEST_CASE("remesh_isotropic: bumpy plane, zero iterations, and bad input",
   nan(5, 0) = std::nan("");
   CHECK_THROWS_WITH(remesh_isotropic(nan, s.F, 0.05), Contains("vertex 5"));
 }
+
+TEST_CASE("remesh: an edge length that would make too many triangles is refused before any work",
+          "[decomposition][remesh][bad-input]") {
+  Positions P;
+  Faces F;
+  test::icosphere(2, P, F);
+  // The unit sphere at edge 1e-9 would need about 3e19 triangles; once, CGAL tried to build them.
+  CHECK_THROWS_WITH(remesh_isotropic(P, F, 1e-9), Contains("triangles") && Contains("at least"));
+  CHECK_NOTHROW(remesh_isotropic(P, F, 0.2));
+}

@@ -78,6 +78,9 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
       r.folded_faces = deformer->frame_report().folded_faces;
       if (const auto* ms = dynamic_cast<const MultiscaleDeformer*>(deformer.get()))
         r.warning = ms->decomposition_report().warning;
+      if (r.folded_faces > 0)
+        r.warning += (r.warning.empty() ? "" : "; ") + std::to_string(r.folded_faces) +
+                     " triangles folded over the deformed base in the frame";
       r.handle_error = handle_error(rest, r.result, edit.region, edit.transforms);
       r.rigidity = rigidity_error(rest, r.result, F).stats;
       const DetailDistortion d = detail_distortion(rest, r.result, F, edit.region);

@@ -40,7 +40,7 @@ struct MethodResult {
   Stats distortion;                     //!< detail distortion, relative to the largest detail height
   int self_intersections = -1;          //!< intersecting face pairs (-1: not measured)
   int folded_faces = -1;                //!< the method's own frame check (FrameReport; -1: not measured)
-  std::string warning;                  //!< what the method warned about at prepare (multi-scale decomposition)
+  std::string warning;                  //!< what the method warned about (decomposition, folded triangles)
   std::optional<double> volume_change;  //!< relative, for closed meshes
   Positions result;                     //!< #V by 3 deformed positions
   Eigen::VectorXd distortion_per_vertex;  //!< #V |Δh| in scene units

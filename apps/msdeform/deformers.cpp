@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <map>
 
+#include "core/errors.h"
 #include "reconstruction/multiscale.h"
 
 namespace msd::cli {
@@ -32,7 +33,7 @@ void DeformerOptions::add_to(CLI::App& cmd) {
   cmd.add_option("--method", method, "Editing method: shell|propagate|multiscale (with --encoding), or a full name: " +
                                          joined(method_names(), "|"))
       ->capture_default_str();
-  cmd.add_option("--encoding", encoding, "multiscale: detail encoding: " + joined(encoding_names(), "|"))
+  encoding_option = cmd.add_option("--encoding", encoding, "multiscale: detail encoding: " + joined(encoding_names(), "|"))
       ->capture_default_str();
   add_settings(cmd);
 }
@@ -84,7 +85,13 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
       ->capture_default_str();
 }
 
-std::string DeformerOptions::method_name() const { return method == "multiscale" ? "multiscale-" + encoding : method; }
+std::string DeformerOptions::method_name() const {
+  if (method == "multiscale") return "multiscale-" + encoding;
+  if (encoding_option && encoding_option->count() > 0)
+    throw InvalidInput("--encoding " + encoding + " applies to --method multiscale; --method " + method +
+                       (method.rfind("multiscale-", 0) == 0 ? " names its encoding itself" : " has no detail encoding"));
+  return method;
+}
 
 MethodOptions DeformerOptions::method_options() const {
   MethodOptions o = options;

@@ -16,13 +16,15 @@ CLI::Validator nonnegative_length();
 struct DeformerOptions {
   std::string method = "shell";
   std::string encoding = "normal";
+  CLI::Option* encoding_option = nullptr;  // set by add_to(): whether --encoding was given
   int fairing_order = 2;
   MethodOptions options;
   // --method, --encoding and add_settings().
   void add_to(CLI::App& cmd);
   // The methods' settings alone (operator, propagation, multi-scale decomposition), for runs of several methods.
   void add_settings(CLI::App& cmd);
-  // The registry name: --method, with "multiscale" completed by --encoding.
+  // The registry name: --method, with "multiscale" completed by --encoding. Throws InvalidInput when
+  // --encoding was given with another method.
   std::string method_name() const;
   // The chosen method, configured. Throws InvalidInput for an unknown name, listing the known ones.
   std::unique_ptr<Deformer> make() const;

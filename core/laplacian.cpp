@@ -41,6 +41,11 @@ TriangleCotangents triangle_cotangents(const Vec3& p0, const Vec3& p1, const Vec
     t.cot[k] = (p[(k + 1) % 3] - p[k]).dot(p[(k + 2) % 3] - p[k]) / t.area2;
     if (std::abs(t.cot[k]) > CotanLaplacian::kMaxCotangent) ++t.needle_corners;
   }
+  // A needle's three cotangents are scaled together, so that the largest is ±kMaxCotangent: a triangle's
+  // weights stay positive semi-definite only as a whole (clamping (K', K', −K') one by one gives (K, K, −K)).
+  const double largest = std::max({std::abs(t.cot[0]), std::abs(t.cot[1]), std::abs(t.cot[2])});
+  const double scale = largest > CotanLaplacian::kMaxCotangent ? CotanLaplacian::kMaxCotangent / largest : 1.0;
+  for (int k = 0; k < 3; ++k) t.weight[k] = scale * t.cot[k];
   return t;
 }
 
@@ -51,19 +56,14 @@ CotanLaplacian cotan_laplacian(const Positions& P, const Faces& F) {
   std::vector<Triplet> triplets;
   triplets.reserve(F.rows() * 9);
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Corner c = corner(P, F, f);
-    const TriangleCotangents t = triangle_cotangents(c.p[0], c.p[1], c.p[2]);
+    const Vec3 p[3] = {P.row(F(f, 0)), P.row(F(f, 1)), P.row(F(f, 2))};
+    const TriangleCotangents t = triangle_cotangents(p[0], p[1], p[2]);
     if (t.degenerate) {
       ++out.degenerate_faces;
       continue;
     }
-    // A needle's three cotangents are scaled together, so that the largest is ±kMaxCotangent: a triangle's
-    // weights stay positive semi-definite only as a whole (clamping (K', K', −K') one by one gives (K, K, −K)).
-    const double largest = std::max({std::abs(t.cot[0]), std::abs(t.cot[1]), std::abs(t.cot[2])});
-    const double scale = largest > CotanLaplacian::kMaxCotangent ? CotanLaplacian::kMaxCotangent / largest : 1.0;
     out.clamped_cotangents += t.needle_corners;
-    double cot[3];
-    for (int k = 0; k < 3; ++k) cot[k] = scale * t.cot[k];
+    const double* cot = t.weight;
     for (int k = 0; k < 3; ++k) {
       // The angle at corner k is opposite the edge (k+1, k+2).
       const int i = F(f, (k + 1) % 3), j = F(f, (k + 2) % 3);
@@ -74,13 +74,13 @@ CotanLaplacian cotan_laplacian(const Positions& P, const Faces& F) {
       triplets.emplace_back(j, j, -w);
     }
     // Mixed Voronoi areas.
-    const double area = 0.5 * c.area2;
+    const double area = 0.5 * t.area2;
     const int obtuse = cot[0] < 0 ? 0 : cot[1] < 0 ? 1 : cot[2] < 0 ? 2 : -1;
     for (int k = 0; k < 3; ++k) {
       double a;
       if (obtuse < 0) {
         const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-        a = ((c.p[k1] - c.p[k]).squaredNorm() * cot[k2] + (c.p[k2] - c.p[k]).squaredNorm() * cot[k1]) / 8.0;
+        a = ((p[k1] - p[k]).squaredNorm() * cot[k2] + (p[k2] - p[k]).squaredNorm() * cot[k1]) / 8.0;
       } else {
         a = k == obtuse ? area / 2 : area / 4;
       }

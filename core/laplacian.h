@@ -27,6 +27,9 @@ struct CotanLaplacian {
 struct TriangleCotangents {
   double area2 = 0;           //!< twice the area, ‖(p1 − p0) × (p2 − p0)‖
   double cot[3] = {0, 0, 0};  //!< cotangent of the angle at corner k (opposite the edge k+1, k+2), unclamped
+  //! The cotangents cotan_laplacian() weighs with: cot, scaled together so the largest is at most
+  //! ±CotanLaplacian::kMaxCotangent (clamping one by one would make a needle's weights indefinite).
+  double weight[3] = {0, 0, 0};
   //! Twice the area at most 2 · kDegenerateAreaRatio · (longest edge)², or not a number: cotan_laplacian()
   //! leaves the face out (cot stays 0).
   bool degenerate = false;

@@ -166,10 +166,9 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
 
   // The Poisson matrix Q = Σ_t Q_t and the per-corner vectors (Q_t S)_k, with Q_t = A_t ∇φ_a·∇φ_b = −W_t the
   // cotan weights of S's triangle t under cotan_laplacian()'s rule: degenerate triangles are left out
-  // (their energy is 0 whatever x does), and a needle's cotangents are bounded by kMaxCotangent. The bound
-  // scales all three cotangents of the face together (its weight in the energy, not its shape): clamping
-  // them one by one, as cotan_laplacian() does, makes a needle with two tiny angles indefinite (cot sums
-  // (c, c, −c) instead of cot α cot β + cot β cot γ + cot γ cot α = 1), and Q would no longer factor.
+  // (their energy is 0 whatever x does), and a needle's cotangents are bounded by kMaxCotangent, all three
+  // scaled together (TriangleCotangents::weight: its weight in the energy, not its shape), so that Q_t
+  // stays positive semi-definite and Q factors.
   // (Q_t S)_k = Σ_m w_km (s_k − s_m) uses edge vectors only, so it does not depend on where S sits.
   std::vector<Triplet> triplets;
   triplets.reserve(12 * nfs);
@@ -186,14 +185,11 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
       continue;
     }
     report.clamped_cotangents += shape.needle_corners;
-    const double largest = std::max({std::abs(shape.cot[0]), std::abs(shape.cot[1]), std::abs(shape.cot[2])});
-    const double scale =
-        largest > CotanLaplacian::kMaxCotangent ? CotanLaplacian::kMaxCotangent / largest : 1.0;
     Vec3 q[3] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
     for (int k = 0; k < 3; ++k) {
       // The angle at corner k weighs the opposite edge (i, j).
       const int a = (k + 1) % 3, b = (k + 2) % 3, i = Fs(t, a), j = Fs(t, b);
-      const double w = 0.5 * scale * shape.cot[k];
+      const double w = 0.5 * shape.weight[k];
       triplets.emplace_back(i, j, -w);
       triplets.emplace_back(j, i, -w);
       triplets.emplace_back(i, i, w);

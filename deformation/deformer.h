@@ -16,8 +16,6 @@ struct FrameReport {
   //! Multi-scale methods: triangles of S' whose normal turned against the deformed base's, relative to
   //! the rest pose (local self-intersections of the details, seed 9.3.3 and Fig. 9.10). O(#F) per frame.
   int folded_faces = -1;
-  //! Iterative parts (e.g. displacement volumes): iterations of the last frame.
-  int iterations = -1;
 };
 
 //! Maps one affine transform per handle to deformed vertex positions.

@@ -34,14 +34,11 @@ constexpr double kMinBaseAreaRatio = 0.5;
 
 // Roles on a remeshed base: every triangle that holds the closest point of a fixed or handle vertex of
 // S gets that vertex's role on all its corners, so those vertices' base points move exactly with their
-// handle (or stay); all other base vertices are free.
-Region transfer_region(const Positions& S, const Region& region, const Positions& base, const Faces& base_faces) {
-  const ClosestPointQuery query(base, base_faces);
-  std::vector<int> codes(base.rows(), Region::kFree);
-  for (int v : region.constrained_vertices()) {
-    const ClosestPoint c = query.query(S.row(v).transpose());
-    for (int k = 0; k < 3; ++k) codes[base_faces(c.face, k)] = region.code(v);
-  }
+// handle (or stay); all other base vertices are free. feet: the closest points of S's vertices.
+Region transfer_region(const Region& region, const std::vector<ClosestPoint>& feet, const RemeshResult& base) {
+  std::vector<int> codes(base.P.rows(), Region::kFree);
+  for (int v : region.constrained_vertices())
+    for (int k = 0; k < 3; ++k) codes[base.F(feet[v].face, k)] = region.code(v);
   return Region::from_codes(std::move(codes));
 }
 
@@ -89,11 +86,11 @@ std::string check_decomposition(const DecompositionReport& r, const MultiscaleOp
 // A remeshed base must stay as close to S as B is (up to 1 % of the diagonal): an edge length beyond the
 // base's curvature radius cuts the shape (measured: edge 2 on the survey cylinder of radius 1 folds 765
 // triangles).
-void check_remeshed_base(const Positions& S, const RemeshResult& r, DecompositionReport& report, double edge) {
+void check_remeshed_base(const Positions& S, const std::vector<ClosestPoint>& feet, const RemeshResult& r,
+                         DecompositionReport& report, double edge) {
   report.remeshed_vertices = static_cast<int>(r.P.rows());
-  const ClosestPointQuery query(r.P, r.F);
   double far = 0;
-  for (const ClosestPoint& c : query.query_all(S)) far = std::max(far, std::sqrt(c.squared_distance));
+  for (const ClosestPoint& c : feet) far = std::max(far, std::sqrt(c.squared_distance));
   const double allowed = std::max(2 * report.check.max_height, 0.01 * bounding_box_diagonal(S));
   if (!(far <= allowed)) {
     char text[300];
@@ -150,8 +147,9 @@ void MultiscaleDeformer::do_prepare(const Mesh& mesh, const Region& region) {
   Region base_region = region;
   if (options_.remesh_base_edge_length > 0) {
     RemeshResult r = remesh_isotropic(base_, F, options_.remesh_base_edge_length);
-    check_remeshed_base(S, r, decomposition_, options_.remesh_base_edge_length);
-    base_region = transfer_region(S, region, r.P, r.F);
+    const std::vector<ClosestPoint> feet = ClosestPointQuery(r.P, r.F).query_all(S);  // S onto the new base
+    check_remeshed_base(S, feet, r, decomposition_, options_.remesh_base_edge_length);
+    base_region = transfer_region(region, feet, r);
     base_ = std::move(r.P);
     base_faces_ = std::move(r.F);
   }

@@ -1,6 +1,5 @@
 #include <chrono>
 #include <cstdio>
-#include <map>
 #include <memory>
 
 #include "apps/msdeform/commands.h"
@@ -34,19 +33,7 @@ void add_decompose_command(CLI::App& app) {
   auto order = std::make_shared<int>(2);
   auto output = std::make_shared<std::string>();
   edit->add_to(*cmd);
-  cmd->add_option("--base", *base, "low-pass: smooth all of S at the detail scale; fairing: fair the free region (needs --sel)")
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, BaseKind>{{"low-pass", BaseKind::LowPass}, {"fairing", BaseKind::Fairing}},
-          CLI::ignore_case))
-      ->default_str("low-pass");
-  cmd->add_option("--detail-scale", low_pass->detail_scale,
-                  "low-pass: features shorter than this length are details; 0 chooses it from the detail heights (where "
-                  "they stop growing with the scale; no detail layer: the base is the mesh)")
-      ->check(nonnegative_length())
-      ->capture_default_str();
-  cmd->add_option("--fairing", *order, "--base fairing: order k, 1 membrane, 2 thin plate, 3 minimum variation")
-      ->check(CLI::Range(1, 3))
-      ->capture_default_str();
+  add_decomposition_options(*cmd, *base, low_pass->detail_scale, *order);
   cmd->add_option("-o,--output", *output,
                   "Base mesh to write, .ply: a per-vertex property 'detail' holds the signed normal-displacement "
                   "height of the detailed vertex (written atomically)")

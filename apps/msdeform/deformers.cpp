@@ -29,6 +29,24 @@ CLI::Validator nonnegative_length() {
       "LENGTH>=0");
 }
 
+void add_decomposition_options(CLI::App& cmd, BaseKind& base, double& detail_scale, int& fairing_order) {
+  cmd.add_option("--base", base,
+                 "low-pass: smooth all of S at the detail scale (keeps the shape); fairing: fair the free region "
+                 "(only for free regions small next to the shape; needs a region)")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, BaseKind>{{"low-pass", BaseKind::LowPass}, {"fairing", BaseKind::Fairing}},
+          CLI::ignore_case))
+      ->default_str("low-pass");
+  cmd.add_option("--detail-scale", detail_scale,
+                 "low-pass base: features shorter than this length (mesh units) are details; 0 chooses it from the "
+                 "detail heights (where they stop growing with the scale; no detail layer: the base is the mesh)")
+      ->check(nonnegative_length())
+      ->capture_default_str();
+  cmd.add_option("--fairing", fairing_order, "--base fairing: order 1 membrane, 2 thin plate, 3 minimum variation")
+      ->check(CLI::Range(1, 3))
+      ->capture_default_str();
+}
+
 void DeformerOptions::add_to(CLI::App& cmd) {
   cmd.add_option("--method", method, "Editing method: shell|propagate|multiscale (with --encoding), or a full name: " +
                                          joined(method_names(), "|"))
@@ -64,21 +82,7 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
           CLI::ignore_case))
       ->default_str("linear");
   auto* ms = cmd.add_option_group("multiscale", "multiscale: decompose, deform the base, add the details back (9.3)");
-  ms->add_option("--base", options.base,
-                 "low-pass: smooth all of S at the detail scale (keeps the shape); fairing: fair the free region "
-                 "(only for free regions small next to the shape)")
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, BaseKind>{{"low-pass", BaseKind::LowPass}, {"fairing", BaseKind::Fairing}},
-          CLI::ignore_case))
-      ->default_str("low-pass");
-  ms->add_option("--detail-scale", options.low_pass.detail_scale,
-                 "low-pass base: features shorter than this length (mesh units) are details; 0 chooses it from the "
-                 "detail heights (where they stop growing with the scale; no detail layer: the base is the mesh)")
-      ->check(nonnegative_length())
-      ->capture_default_str();
-  ms->add_option("--fairing", fairing_order, "--base fairing: order 1 membrane, 2 thin plate, 3 minimum variation")
-      ->check(CLI::Range(1, 3))
-      ->capture_default_str();
+  add_decomposition_options(*ms, options.base, options.low_pass.detail_scale, fairing_order);
   ms->add_option("--remesh-base", options.remesh_base_edge_length,
                  "remesh the base isotropically to this edge length before encoding (0: keep S's triangles)")
       ->check(nonnegative_length())

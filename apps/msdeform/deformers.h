@@ -13,6 +13,9 @@ namespace msd::cli {
 // Checks that an option is a finite length >= 0, naming the option.
 CLI::Validator nonnegative_length();
 
+// --base, --detail-scale and --fairing: how the multi-scale base is computed (deform, compare, decompose).
+void add_decomposition_options(CLI::App& cmd, BaseKind& base, double& detail_scale, int& fairing_order);
+
 struct DeformerOptions {
   std::string method = "shell";
   std::string encoding = "normal";

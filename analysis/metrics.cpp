@@ -7,10 +7,11 @@
 #include <string>
 #include <utility>
 
+#include "core/checks.h"
 #include "core/errors.h"
 #include "core/laplacian.h"
 #include "core/parallel.h"
-#include "decomposition/laplace.h"
+#include "core/laplacian.h"
 #include "detail/normal_displacements.h"
 
 namespace msd {
@@ -200,8 +201,8 @@ DetailDistortion detail_distortion(const Positions& rest, const Positions& defor
   if (free.empty())
     throw InvalidInput(std::string(who) + ": the region has no free vertex to measure details on");
 
-  const Positions B0 = fair_region(make_mesh(rest, F), region, fairing);
-  const Positions B1 = fair_region(make_mesh(deformed, F), region, fairing);
+  const Positions B0 = fair_region(rest, F, region, fairing);
+  const Positions B1 = fair_region(deformed, F, region, fairing);
   NormalDisplacements before, after;
   before.encode(rest, F, B0, F);
   after.encode(deformed, F, B1, F);

@@ -10,11 +10,12 @@
 #include <string>
 #include <tuple>
 
+#include "core/checks.h"
 #include "core/atomic_file.h"
 #include "core/errors.h"
 #include "core/mesh.h"
 #include "core/parallel.h"
-#include "decomposition/laplace.h"
+#include "core/laplacian.h"
 
 namespace msd {
 namespace {

@@ -16,8 +16,9 @@
 #include <iterator>
 #include <string>
 
+#include "core/checks.h"
 #include "core/errors.h"
-#include "decomposition/laplace.h"
+#include "core/laplacian.h"
 
 namespace msd {
 namespace {

@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
     options.resolution = msd::parse_resolution(size);
     const msd::Scene scene = msd::make_scene("lift", options);
     auto t0 = std::chrono::steady_clock::now();
-    const msd::CotanLaplacian lap = msd::cotan_laplacian(scene.P, scene.F);
+    const msd::LaplaceOperator lap = msd::cotan_laplacian(scene.P, scene.F);
     const double t_cotan = seconds_since(t0);
     t0 = std::chrono::steady_clock::now();
     const Eigen::VectorXd inv_mass = lap.mass.cwiseInverse();

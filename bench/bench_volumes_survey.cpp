@@ -95,9 +95,9 @@ int main(int argc, char** argv) {
     smoothing.time_step = time_step;
     smoothing.iterations = smoothing_iterations;
     const msd::Positions B =
-        fair ? msd::fair_region(msd::make_mesh(S, F), region) : msd::implicit_smoothing(S, F, smoothing);
+        fair ? msd::fair_region(S, F, region) : msd::implicit_smoothing(S, F, smoothing);
     msd::ShellDeformer shell;
-    shell.prepare(msd::make_mesh(B, F), region);
+    shell.prepare(B, F, region);
     // Frames: the edit at 1/4, 1/2, 3/4, 1, 3/4, ... (the last frame is the full edit).
     std::vector<std::vector<msd::Mat4>> frames;
     for (double s : {0.25, 0.5, 0.75, 1.0, 0.75, 0.5, 0.75, 1.0}) frames.push_back(partial(transforms, s));

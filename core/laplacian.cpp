@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "core/errors.h"
 #include "core/parallel.h"
 
 namespace msd {
@@ -39,19 +40,19 @@ TriangleCotangents triangle_cotangents(const Vec3& p0, const Vec3& p1, const Vec
   if (t.degenerate) return t;
   for (int k = 0; k < 3; ++k) {
     t.cot[k] = (p[(k + 1) % 3] - p[k]).dot(p[(k + 2) % 3] - p[k]) / t.area2;
-    if (std::abs(t.cot[k]) > CotanLaplacian::kMaxCotangent) ++t.needle_corners;
+    if (std::abs(t.cot[k]) > LaplaceOperator::kMaxCotangent) ++t.needle_corners;
   }
   // A needle's three cotangents are scaled together, so that the largest is ±kMaxCotangent: a triangle's
   // weights stay positive semi-definite only as a whole (clamping (K', K', −K') one by one gives (K, K, −K)).
   const double largest = std::max({std::abs(t.cot[0]), std::abs(t.cot[1]), std::abs(t.cot[2])});
-  const double scale = largest > CotanLaplacian::kMaxCotangent ? CotanLaplacian::kMaxCotangent / largest : 1.0;
+  const double scale = largest > LaplaceOperator::kMaxCotangent ? LaplaceOperator::kMaxCotangent / largest : 1.0;
   for (int k = 0; k < 3; ++k) t.weight[k] = scale * t.cot[k];
   return t;
 }
 
-CotanLaplacian cotan_laplacian(const Positions& P, const Faces& F) {
+LaplaceOperator cotan_laplacian(const Positions& P, const Faces& F) {
   const int nv = static_cast<int>(P.rows());
-  CotanLaplacian out;
+  LaplaceOperator out;
   out.mass = Eigen::VectorXd::Zero(nv);
   std::vector<Triplet> triplets;
   triplets.reserve(F.rows() * 9);
@@ -158,6 +159,45 @@ SparseMatrix submatrix(const SparseMatrix& A, const std::vector<int>& rows, cons
   SparseMatrix S(rows.size(), cols.size());
   S.setFromTriplets(triplets.begin(), triplets.end());
   return S;
+}
+
+LaplaceOperator laplace_operator(const Positions& P, const Faces& F, LaplacianWeights weights) {
+  LaplaceOperator op;
+  const int nv = static_cast<int>(P.rows());
+  if (weights == LaplacianWeights::Cotan) {
+    LaplaceOperator lap = cotan_laplacian(P, F);
+    op.W = std::move(lap.W);
+    op.mass = std::move(lap.mass);
+    return op;
+  }
+  op.W = uniform_laplacian(F, nv);
+  const double h = mean_edge_length(P, F);
+  // On a regular triangulation with edge h the umbrella D⁻¹W applied to x² + y² gives h², while Δ gives 4.
+  op.mass = -op.W.diagonal() * (h * h / 4.0);
+  return op;
+}
+
+double mean_edge_length(const Positions& P, const Faces& F) {
+  if (F.rows() == 0) return 0;
+  double sum = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) sum += (P.row(F(f, k)) - P.row(F(f, (k + 1) % 3))).norm();
+  return sum / (3.0 * static_cast<double>(F.rows()));
+}
+
+SparseMatrix polyharmonic_matrix(const LaplaceOperator& op, int k) {
+  if (k < 1 || k > 3)
+    throw InvalidInput("polyharmonic_matrix: order " + std::to_string(k) + " (expected 1, 2 or 3)");
+  if (k == 1) return -op.W;
+  const Eigen::VectorXd inv_mass = op.mass.unaryExpr([](double m) { return m > 0 ? 1.0 / m : 0.0; });
+  const SparseMatrix L = inv_mass.asDiagonal() * op.W;  // Δ = M⁻¹W
+  SparseMatrix Q = op.W * L;                            // W M⁻¹ W = M Δ²
+  if (k == 3) Q = -SparseMatrix(Q * L);                 // −W M⁻¹ W M⁻¹ W = −M Δ³
+  return Q;
+}
+
+const char* to_string(LaplacianWeights weights) {
+  return weights == LaplacianWeights::Cotan ? "cotan" : "uniform";
 }
 
 }  // namespace msd

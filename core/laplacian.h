@@ -7,14 +7,24 @@
 
 namespace msd {
 
-//! Cotangent Laplacian in symmetric form: Δf = M⁻¹ W f.
-struct CotanLaplacian {
-  //! #V by #V symmetric, W_ij = (cot α_ij + cot β_ij) / 2 for each edge, W_ii = -Σ_j W_ij: negative
-  //! semi-definite with the constants in its kernel.
+//! Edge weights of the discrete Laplacian.
+enum class LaplacianWeights {
+  Cotan,    //!< cotangent weights and mixed-Voronoi areas: geometry-aware, linear precision
+  Uniform,  //!< graph (umbrella) weights: 1 per edge, mass = degree · h̄²/4 (see laplace_operator)
+};
+const char* to_string(LaplacianWeights weights);
+
+//! The Laplace operator in symmetric form, Δf = M⁻¹ W f: the one operator type of msdeform (shell,
+//! fairing, smoothing, low-pass, propagation and the metrics all use it).
+struct LaplaceOperator {
+  //! #V by #V symmetric, negative semi-definite, constants in the kernel. Cotan:
+  //! W_ij = (cot α_ij + cot β_ij) / 2 for each edge, W_ii = -Σ_j W_ij.
   SparseMatrix W;
-  //! #V mixed-Voronoi vertex areas (Meyer et al. 2003); they sum to the surface area.
+  //! #V diagonal of M. Cotan: mixed-Voronoi vertex areas (Meyer et al. 2003), summing to the surface area.
+  //! Uniform: degree · h̄²/4 (h̄ the mean edge length), so M⁻¹W approximates the same Δ (1/length²) on
+  //! regular meshes. 0 for a vertex without a usable face.
   Eigen::VectorXd mass;
-  int degenerate_faces = 0;    //!< faces of (near) zero area, left out of W and the mass
+  int degenerate_faces = 0;    //!< cotan: faces of (near) zero area, left out of W and the mass
   //! Needle angles, |cot| > kMaxCotangent. Their triangle's three cotangents are scaled together so the
   //! largest is ±kMaxCotangent: the triangle's weights stay positive semi-definite (clamping one by one
   //! turns a needle's (K', K', −K') into the indefinite (K, K, −K)).
@@ -28,12 +38,12 @@ struct TriangleCotangents {
   double area2 = 0;           //!< twice the area, ‖(p1 − p0) × (p2 − p0)‖
   double cot[3] = {0, 0, 0};  //!< cotangent of the angle at corner k (opposite the edge k+1, k+2), unclamped
   //! The cotangents cotan_laplacian() weighs with: cot, scaled together so the largest is at most
-  //! ±CotanLaplacian::kMaxCotangent (clamping one by one would make a needle's weights indefinite).
+  //! ±LaplaceOperator::kMaxCotangent (clamping one by one would make a needle's weights indefinite).
   double weight[3] = {0, 0, 0};
   //! Twice the area at most 2 · kDegenerateAreaRatio · (longest edge)², or not a number: cotan_laplacian()
   //! leaves the face out (cot stays 0).
   bool degenerate = false;
-  //! Corners with |cot| > CotanLaplacian::kMaxCotangent (cotan_laplacian() scales the triangle's cotangents
+  //! Corners with |cot| > LaplaceOperator::kMaxCotangent (cotan_laplacian() scales the triangle's cotangents
   //! down together): a needle.
   int needle_corners = 0;
   static constexpr double kDegenerateAreaRatio = 1e-14;
@@ -45,7 +55,22 @@ TriangleCotangents triangle_cotangents(const Vec3& p0, const Vec3& p1, const Vec
 //! Cotan weights and mixed-Voronoi mass of (P #V×3, F #F×3). A face whose area is below 1e-14 times its
 //! squared longest edge counts as degenerate and contributes nothing; cotangents are clamped, so the
 //! result is always finite.
-CotanLaplacian cotan_laplacian(const Positions& P, const Faces& F);
+LaplaceOperator cotan_laplacian(const Positions& P, const Faces& F);
+
+//! The Laplace operator of (P #V×3, F #F×3) with the given weights. Indices are not checked here;
+//! callers validate their input first (see check_mesh_arrays).
+LaplaceOperator laplace_operator(const Positions& P, const Faces& F, LaplacianWeights weights);
+
+//! The symmetric polyharmonic matrix of order k = 1, 2, 3 (#V by #V) of op, Δ = M⁻¹W:
+//!   Q₁ = −W,   Q₂ = W M⁻¹ W,   Q₃ = −W M⁻¹ W M⁻¹ W,
+//! i.e. Q_k = (−1)ᵏ M Δᵏ, positive semi-definite: xᵀQ₁x is the membrane, xᵀQ₂x the thin-plate and xᵀQ₃x
+//! the minimum-variation energy (seed 9.2, (9.5)–(9.7); Botsch & Kobbelt 2004). The shell operator
+//! ks·Q₁ + kb·Q₂ and the fairing of order k both come from here. Vertices with zero mass get M⁻¹ = 0
+//! (their rows then only keep Q₁'s part). \throw InvalidInput for k outside 1..3.
+SparseMatrix polyharmonic_matrix(const LaplaceOperator& op, int k);
+
+//! Mean length of the three edges of every face of (P, F) (interior edges count twice); 0 without faces.
+double mean_edge_length(const Positions& P, const Faces& F);
 
 //! Uniform (graph) Laplacian in symmetric form: W_ij = 1 per edge, W_ii = -degree. Δ_uniform = D⁻¹ W.
 SparseMatrix uniform_laplacian(const Faces& F, int num_vertices);

@@ -185,22 +185,6 @@ VertexFaces vertex_faces(const Faces& F, int num_vertices) {
   return out;
 }
 
-void check_finite(const Positions& X, const char* who, const char* what) {
-  if (X.allFinite()) return;
-  for (Eigen::Index v = 0; v < X.rows(); ++v)
-    if (!X.row(v).allFinite())
-      throw InvalidInput(std::string(who) + ": vertex " + std::to_string(v) + " of " + what +
-                         " has a non-finite coordinate");
-}
-
-void check_faces(const Faces& F, Eigen::Index num_vertices, const char* who, const char* what) {
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k)
-      if (F(f, k) < 0 || F(f, k) >= num_vertices)
-        throw InvalidInput(std::string(who) + ": face " + std::to_string(f) + " of " + what + " has vertex index " +
-                           std::to_string(F(f, k)) + " out of range [0, " + std::to_string(num_vertices) + ")");
-}
-
 double bounding_box_diagonal(const Positions& P) {
   if (P.rows() < 2) return 0.0;
   return (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm();

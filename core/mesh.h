@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "core/checks.h"
 #include "core/types.h"
 
 namespace msd {
@@ -61,11 +62,6 @@ struct VertexFaces {
   std::vector<int> offsets, faces;
 };
 VertexFaces vertex_faces(const Faces& F, int num_vertices);
-
-//! \throw InvalidInput "<who>: vertex v of <what> has a non-finite coordinate" for the first such row of X.
-void check_finite(const Positions& X, const char* who, const char* what);
-//! \throw InvalidInput "<who>: face f of <what> has vertex index i out of range [0, n)" for the first such face.
-void check_faces(const Faces& F, Eigen::Index num_vertices, const char* who, const char* what);
 
 //! Axis-aligned bounding box diagonal length of P (0 for fewer than two points).
 double bounding_box_diagonal(const Positions& P);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/adjacency.h"
 #include "core/atomic_file.h"
 #include "core/errors.h"
 
@@ -54,10 +55,10 @@ std::vector<int> Region::handle_vertices(int handle) const {
   return vertices_where(codes_, [&](int c) { return c == kFirstHandle + handle; });
 }
 
-void Region::validate(const Mesh& mesh) const {
-  if (num_vertices() != static_cast<int>(mesh.n_vertices()))
-    throw InvalidInput("region has " + std::to_string(num_vertices()) + " vertex labels but the mesh has " +
-                       std::to_string(mesh.n_vertices()) + " vertices");
+void Region::validate(int num_vertices, const Faces* F) const {
+  if (this->num_vertices() != num_vertices)
+    throw InvalidInput("region has " + std::to_string(this->num_vertices()) + " vertex labels but the mesh has " +
+                       std::to_string(num_vertices) + " vertices");
   std::vector<int> count(num_handles_, 0);
   for (int c : codes_)
     if (c >= kFirstHandle) ++count[c - kFirstHandle];
@@ -66,10 +67,12 @@ void Region::validate(const Mesh& mesh) const {
       throw InvalidInput("region: handle " + std::to_string(h) + " (selection code " + std::to_string(h + kFirstHandle) +
                          ") has no vertex, but handle " + std::to_string(num_handles_ - 1) +
                          " exists; handle codes must be consecutive");
+  if (!F) return;
   // Flood-fill the free vertices; each component must reach a constrained neighbour.
-  std::vector<int> component(num_vertices(), -1), stack;
+  const VertexAdjacency adjacency = vertex_adjacency(*F, num_vertices);
+  std::vector<int> component(num_vertices, -1), stack;
   int num_components = 0;
-  for (int seed = 0; seed < num_vertices(); ++seed) {
+  for (int seed = 0; seed < num_vertices; ++seed) {
     if (!is_free(seed) || component[seed] >= 0) continue;
     const int id = num_components++;
     bool anchored = false;
@@ -80,12 +83,12 @@ void Region::validate(const Mesh& mesh) const {
       const int v = stack.back();
       stack.pop_back();
       ++size;
-      for (auto w : mesh.vv_range(mesh.vertex_handle(v))) {
-        if (!is_free(w.idx())) {
+      for (const int* w = adjacency.begin(v); w != adjacency.end(v); ++w) {
+        if (!is_free(*w)) {
           anchored = true;
-        } else if (component[w.idx()] < 0) {
-          component[w.idx()] = id;
-          stack.push_back(w.idx());
+        } else if (component[*w] < 0) {
+          component[*w] = id;
+          stack.push_back(*w);
         }
       }
     }

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "core/mesh.h"
+#include "core/types.h"
 
 namespace msd {
 
@@ -42,12 +42,13 @@ class Region {
   std::vector<int> handle_vertices(int handle) const;
   std::vector<int> fixed_vertices() const;
 
-  //! Checks the region against the mesh: same vertex count, every handle 0..num_handles()-1 non-empty,
-  //! and every connected component of free vertices touches a fixed or handle vertex (else its shape is
-  //! undetermined and the systems are singular).
+  //! Checks the region against a shape of num_vertices points: same vertex count and every handle
+  //! 0..num_handles()-1 non-empty. With faces (F #F by 3, a surface method), also that every connected
+  //! component of free vertices touches a fixed or handle vertex through an edge of F (else its shape is
+  //! undetermined and the systems are singular); space methods pass no faces.
   //! \throw InvalidInput on a count mismatch or an empty handle; TopologyError naming the component, its
   //! size and one of its vertices.
-  void validate(const Mesh& mesh) const;
+  void validate(int num_vertices, const Faces* F = nullptr) const;
 
  private:
   void set(const std::vector<int>& vertices, int code);

@@ -5,9 +5,11 @@
 #include <string>
 #include <vector>
 
+#include "core/adjacency.h"
+#include "core/checks.h"
 #include "core/errors.h"
 #include "core/mesh.h"
-#include "decomposition/laplace.h"
+#include "core/laplacian.h"
 
 namespace msd {
 

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <string>
 
+#include "core/checks.h"
+#include "core/adjacency.h"
+#include "core/checks.h"
 #include "core/errors.h"
 
 namespace msd {
@@ -15,15 +18,15 @@ bool valid_order(FairingOrder order) {
 
 // Region checks with the caller's name in front, and the one case Region::validate words generically
 // (no constrained vertex at all) spelled out for fairing.
-void check_region(const Mesh& mesh, const Region& region, const char* who) {
-  if (region.num_vertices() == static_cast<int>(mesh.n_vertices()) && region.num_vertices() > 0 &&
+void check_region(const Faces& F, int num_vertices, const Region& region, const char* who) {
+  if (region.num_vertices() == num_vertices && region.num_vertices() > 0 &&
       region.constrained_vertices().empty())
     throw InvalidInput(
         std::string(who) +
         ": the region has no fixed or handle vertex; fairing keeps those vertices and computes the "
         "free ones from them, so mark at least the border of the region to fair as fixed");
   try {
-    region.validate(mesh);
+    region.validate(num_vertices, &F);
   } catch (const TopologyError& e) {
     throw TopologyError(std::string(who) + ": " + e.what());
   } catch (const InvalidInput& e) {
@@ -45,58 +48,26 @@ const char* to_string(FairingOrder order) {
   return "invalid";
 }
 
-std::vector<int> mesh_boundary_band(const Mesh& mesh, int rings) {
-  const int nv = static_cast<int>(mesh.n_vertices());
-  std::vector<char> in_band(nv, 0);
-  std::vector<int> ring;
-  for (auto v : mesh.vertices())
-    if (mesh.is_boundary(v)) in_band[v.idx()] = 1, ring.push_back(v.idx());
-  for (int r = 1; r < rings; ++r) {
-    std::vector<int> next;
-    for (int v : ring)
-      for (auto w : mesh.vv_range(mesh.vertex_handle(v)))
-        if (!in_band[w.idx()]) in_band[w.idx()] = 1, next.push_back(w.idx());
-    ring.swap(next);
-  }
-  std::vector<int> band;
-  for (int v = 0; v < nv && rings > 0; ++v)
-    if (in_band[v]) band.push_back(v);
-  return band;
+RegionFairing::RegionFairing(const Positions& P, const Faces& F, const Region& region, const FairingOptions& options) {
+  prepare(P, F, region, options);
 }
 
-SparseMatrix fairing_matrix(const LaplaceOperator& op, FairingOrder order) {
-  if (!valid_order(order))
-    throw InvalidInput("fairing_matrix: order " + std::to_string(static_cast<int>(order)) +
-                       " (expected 1, 2 or 3)");
-  const Eigen::VectorXd inv_mass = op.mass.unaryExpr([](double m) { return m > 0 ? 1.0 / m : 0.0; });
-  if (order == FairingOrder::Membrane) return -op.W;
-  const SparseMatrix L = inv_mass.asDiagonal() * op.W;                    // Δ = M⁻¹W
-  SparseMatrix Q = op.W * L;                                              // W M⁻¹ W = M Δ²
-  if (order == FairingOrder::MinimumVariation) Q = -SparseMatrix(Q * L);  // −W M⁻¹ W M⁻¹ W = −M Δ³
-  return Q;
-}
-
-RegionFairing::RegionFairing(const Mesh& mesh, const Region& region, const FairingOptions& options) {
-  prepare(mesh, region, options);
-}
-
-void RegionFairing::prepare(const Mesh& mesh, const Region& region, const FairingOptions& options) {
+void RegionFairing::prepare(const Positions& P, const Faces& F, const Region& region, const FairingOptions& options) {
   static const char* who = "fair_region";
   prepared_ = false;
   if (!valid_order(options.order))
     throw InvalidInput(std::string(who) + ": fairing order " +
                        std::to_string(static_cast<int>(options.order)) +
                        " (expected 1 membrane, 2 thin plate or 3 minimum variation)");
-  check_region(mesh, region, who);
+  check_mesh_arrays(P, F, who);
+  check_region(F, static_cast<int>(P.rows()), region, who);
   options_ = options;
-  rest_ = positions(mesh);
-  const Faces F = faces(mesh);
-  check_mesh_arrays(rest_, F, who);
+  rest_ = P;
   std::vector<int> known = region.constrained_vertices();
   std::vector<char> is_known(rest_.rows(), 0);
   for (int v : known) is_known[v] = 1;
   if (options.fix_mesh_boundary) {
-    for (int v : mesh_boundary_band(mesh, static_cast<int>(options.order)))
+    for (int v : boundary_band(F, static_cast<int>(P.rows()), static_cast<int>(options.order)))
       if (!is_known[v]) is_known[v] = 1, known.push_back(v);
     std::sort(known.begin(), known.end());
   }
@@ -106,7 +77,7 @@ void RegionFairing::prepare(const Mesh& mesh, const Region& region, const Fairin
       throw InvalidInput(
           std::string(who) + ": free vertex " + std::to_string(v) +
           " has no incident face of non-zero area, so Δ is undefined there; remove it or mark it fixed");
-  Q_ = fairing_matrix(op, options.order);
+  Q_ = polyharmonic_matrix(op, static_cast<int>(options.order));
   try {
     system_.prepare(Q_, known);
   } catch (const SolverError& e) {
@@ -162,8 +133,8 @@ void RegionFairing::solve_known(Positions& out) const {
   out = x_;
 }
 
-Positions fair_region(const Mesh& mesh, const Region& region, const FairingOptions& options) {
-  return RegionFairing(mesh, region, options).base();
+Positions fair_region(const Positions& P, const Faces& F, const Region& region, const FairingOptions& options) {
+  return RegionFairing(P, F, region, options).base();
 }
 
 }  // namespace msd

@@ -6,10 +6,9 @@
 
 #include <vector>
 
-#include "core/mesh.h"
 #include "core/region.h"
 #include "core/solver.h"
-#include "decomposition/laplace.h"
+#include "core/laplacian.h"
 
 namespace msd {
 
@@ -39,16 +38,6 @@ struct FairingOptions {
 
 const char* to_string(FairingOrder order);
 
-//! Vertices within `rings` rings of the mesh boundary, ascending: boundary vertices (on an edge with one
-//! face) for rings = 1, plus their neighbours for 2, and so on; empty for rings <= 0.
-std::vector<int> mesh_boundary_band(const Mesh& mesh, int rings);
-
-//! The symmetric positive semi-definite fairing matrix of order k (#V by #V), Δ = M⁻¹W of `op`:
-//!   Q₁ = −W,   Q₂ = W M⁻¹ W,   Q₃ = −W M⁻¹ W M⁻¹ W,
-//! i.e. Q_k = (−1)ᵏ M Δᵏ, so (Q_k b)_i = 0 exactly where (Δᵏ b)_i = 0 (for m_i > 0), and bᵀQ_k b is the
-//! discrete membrane / thin-plate / minimum-variation energy. Vertices with zero mass get M⁻¹ = 0.
-SparseMatrix fairing_matrix(const LaplaceOperator& op, FairingOrder order);
-
 //! Fairing prepared once for a mesh and region: prepare() assembles Q_k on the rest geometry and
 //! factors it restricted to the free vertices (ConstrainedQuadratic); fair() then re-fairs any new
 //! positions of the constrained vertices with one back-substitution (O(#V) work besides it, internal
@@ -58,15 +47,15 @@ class RegionFairing {
  public:
   RegionFairing() = default;
   //! Same as prepare().
-  RegionFairing(const Mesh& mesh, const Region& region, const FairingOptions& options = {});
+  RegionFairing(const Positions& P, const Faces& F, const Region& region, const FairingOptions& options = {});
 
-  //! mesh: the surface S whose geometry defines Δ; region: free vertices are faired, fixed and handle
+  //! P (#V by 3), F (#F by 3): the surface S whose geometry defines Δ; region: free vertices are faired, fixed and handle
   //! vertices are kept (Region codes; handles are not distinguished here).
   //! \throw InvalidInput for a region of the wrong size, an empty handle, no constrained vertex, a
   //! non-finite position, an invalid order, or a free vertex without incident area; TopologyError for a
   //! free component that touches no constrained vertex (Region::validate); SolverError naming the vertex
   //! where the system is singular.
-  void prepare(const Mesh& mesh, const Region& region, const FairingOptions& options = {});
+  void prepare(const Positions& P, const Faces& F, const Region& region, const FairingOptions& options = {});
   bool prepared() const { return prepared_; }
 
   //! Faired positions for P (#V by 3): only the rows of constrained vertices are read; writes #V by 3
@@ -91,7 +80,7 @@ class RegionFairing {
   //! The faired vertices, ascending (the unknowns): the region's free vertices, without those in the
   //! boundary band if options().fix_mesh_boundary.
   const std::vector<int>& free_vertices() const { return system_.unknown(); }
-  //! Q_k of the rest geometry (#V by #V), see fairing_matrix().
+  //! Q_k of the rest geometry (#V by #V), see polyharmonic_matrix().
   const SparseMatrix& matrix() const { return Q_; }
 
  private:
@@ -105,10 +94,10 @@ class RegionFairing {
   mutable Eigen::MatrixXd known_, x_;  // per-call workspace
 };
 
-//! One-shot fairing of the free vertices of `region` on `mesh` (see RegionFairing): #V by 3 positions,
+//! One-shot fairing of the free vertices of `region` on (P, F) (see RegionFairing): #V by 3 positions,
 //! equal to the mesh positions on fixed and handle vertices (and near the mesh boundary, see
 //! FairingOptions::fix_mesh_boundary), Δᵏ b = 0 on the other free ones.
 //! \throw as RegionFairing::prepare().
-Positions fair_region(const Mesh& mesh, const Region& region, const FairingOptions& options = {});
+Positions fair_region(const Positions& P, const Faces& F, const Region& region, const FairingOptions& options = {});
 
 }  // namespace msd

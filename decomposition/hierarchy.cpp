@@ -3,6 +3,8 @@
 #include <cmath>
 #include <string>
 
+#include "core/adjacency.h"
+#include "core/checks.h"
 #include "core/errors.h"
 
 namespace msd {
@@ -62,15 +64,14 @@ void DecompositionHierarchy::reconstruct_global(const Positions& base_deformed, 
   for (int i = num_levels() - 1; i >= 1; --i) out += levels_[i - 1] - levels_[i];
 }
 
-DecompositionHierarchy build_hierarchy(const Mesh& mesh, const Region& region,
+DecompositionHierarchy build_hierarchy(const Positions& P, const Faces& F, const Region& region,
                                        const HierarchyOptions& options) {
-  const Positions P = positions(mesh);
-  const Faces F = faces(mesh);
+  check_mesh_arrays(P, F, "build_hierarchy");
   if (options.method == HierarchyMethod::Smoothing) return {smoothing_levels(P, F, options), F};
   if (options.orders.empty()) throw InvalidInput("build_hierarchy: no fairing order given");
-  if (region.num_vertices() != static_cast<int>(mesh.n_vertices()))
+  if (region.num_vertices() != P.rows())
     throw InvalidInput("build_hierarchy: the region has " + std::to_string(region.num_vertices()) +
-                       " vertex labels but the mesh has " + std::to_string(mesh.n_vertices()) + " vertices");
+                       " vertex labels but the mesh has " + std::to_string(P.rows()) + " vertices");
   for (size_t i = 1; i < options.orders.size(); ++i)
     if (static_cast<int>(options.orders[i]) < static_cast<int>(options.orders[i - 1]))
       throw InvalidInput("build_hierarchy: fairing orders must not decrease (level " + std::to_string(i + 1) +
@@ -80,7 +81,7 @@ DecompositionHierarchy build_hierarchy(const Mesh& mesh, const Region& region,
   Region constraints = region;
   if (options.fix_mesh_boundary) {
     std::vector<int> band;
-    for (int v : mesh_boundary_band(mesh, static_cast<int>(options.orders.back())))
+    for (int v : boundary_band(F, static_cast<int>(P.rows()), static_cast<int>(options.orders.back())))
       if (region.is_free(v)) band.push_back(v);
     constraints.set_fixed(band);
   }
@@ -96,18 +97,15 @@ DecompositionHierarchy build_hierarchy(const Mesh& mesh, const Region& region,
     fo.fix_mesh_boundary = false;  // the band is in `constraints`
     // Fairing reads only the constrained rows, and those equal S's on every level: fairing S_{i-1} is
     // fairing S.
-    levels.push_back(fair_region(mesh, constraints, fo));
+    levels.push_back(fair_region(P, F, constraints, fo));
   }
   return {std::move(levels), F};
 }
 
 DecompositionHierarchy build_hierarchy(const Positions& P, const Faces& F, const HierarchyOptions& options) {
   if (options.method != HierarchyMethod::Smoothing)
-    throw UsageError(
-        "build_hierarchy: the fairing hierarchy needs a mesh and a region; call build_hierarchy(mesh, "
-        "region, options)");
-  check_mesh_arrays(P, F, "build_hierarchy");
-  return {smoothing_levels(P, F, options), F};
+    throw UsageError("build_hierarchy: the fairing hierarchy needs a region; call build_hierarchy(P, F, region, options)");
+  return build_hierarchy(P, F, Region(static_cast<int>(P.rows())), options);
 }
 
 }  // namespace msd

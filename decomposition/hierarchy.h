@@ -11,7 +11,7 @@
 
 #include <vector>
 
-#include "core/mesh.h"
+#include "core/types.h"
 #include "core/region.h"
 #include "decomposition/fairing.h"
 #include "decomposition/smoothing.h"
@@ -82,11 +82,11 @@ class DecompositionHierarchy {
   Faces faces_;
 };
 
-//! Builds the hierarchy of the surface of `mesh` (see HierarchyMethod). The region is used by the
+//! Builds the hierarchy of the surface (P #V×3, F #F×3) (see HierarchyMethod). The region is used by the
 //! Fairing method only (validated then; ignored by Smoothing).
 //! \throw InvalidInput for an empty or decreasing `orders` list, levels < 1, a growth that is not
 //! positive and finite, and everything fair_region() or implicit_smoothing() throw.
-DecompositionHierarchy build_hierarchy(const Mesh& mesh, const Region& region,
+DecompositionHierarchy build_hierarchy(const Positions& P, const Faces& F, const Region& region,
                                        const HierarchyOptions& options = {});
 
 //! Smoothing hierarchy from arrays (P #V by 3, F #F by 3), no region needed.

@@ -4,10 +4,12 @@
 #include <cmath>
 #include <string>
 
+#include "core/adjacency.h"
+#include "core/checks.h"
 #include "core/errors.h"
 #include "core/laplacian.h"
 #include "core/solver.h"
-#include "decomposition/laplace.h"
+#include "core/laplacian.h"
 
 namespace msd {
 namespace {
@@ -28,7 +30,7 @@ constexpr double kMinAreaRatio = 0.5;
 class LowPassSystem {
  public:
   LowPassSystem(const Positions& S, const Faces& F) {
-    const CotanLaplacian lap = cotan_laplacian(S, F);
+    const LaplaceOperator lap = cotan_laplacian(S, F);
     const int nv = static_cast<int>(S.rows());
     mass_ = lap.mass;
     const double floor = kMassFloor * std::max(mass_.mean(), 1e-300);

@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "core/adjacency.h"
+#include "core/checks.h"
 #include "core/errors.h"
 #include "core/laplacian.h"
 #include "core/mesh.h"

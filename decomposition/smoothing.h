@@ -6,7 +6,7 @@
 //! any time step is stable; features smaller than about √t are damped most.
 
 #include "core/types.h"
-#include "decomposition/laplace.h"
+#include "core/laplacian.h"
 
 namespace msd {
 

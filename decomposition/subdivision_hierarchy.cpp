@@ -4,10 +4,11 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/checks.h"
 #include "core/errors.h"
 #include "core/parallel.h"
 #include "core/solver.h"
-#include "decomposition/laplace.h"
+#include "core/laplacian.h"
 
 namespace msd {
 namespace {

@@ -2,50 +2,137 @@
 
 #include <cmath>
 
+#include "core/checks.h"
 #include "core/errors.h"
 
 namespace msd {
 
-void check_affine(const std::vector<Mat4>& transforms, const char* who) {
+void check_affine(const std::vector<Mat4>& transforms, const std::string& who) {
   for (size_t k = 0; k < transforms.size(); ++k) {
     if (!transforms[k].allFinite())
-      throw InvalidInput(std::string(who) + ": transform of handle " + std::to_string(k) + " has a non-finite entry");
+      throw InvalidInput(who + ": transform of handle " + std::to_string(k) + " has a non-finite entry");
     if ((transforms[k].row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-12)
-      throw InvalidInput(std::string(who) + ": transform of handle " + std::to_string(k) +
+      throw InvalidInput(who + ": transform of handle " + std::to_string(k) +
                          " is not affine (last row must be 0 0 0 1)");
   }
 }
 
-void Deformer::prepare(const Mesh& mesh, const Region& region) {
+void affine_targets(const Positions& rest, const std::vector<int>& constrained, const std::vector<int>& handle_of,
+                    const std::vector<Mat4>& transforms, Positions& targets) {
+  if (targets.rows() != static_cast<Eigen::Index>(constrained.size())) targets.resize(constrained.size(), 3);
+  for (size_t c = 0; c < constrained.size(); ++c) {
+    const Vec3 p = rest.row(constrained[c]);
+    targets.row(c) = handle_of[c] < 0 ? p : transform_point(transforms[handle_of[c]], p);
+  }
+}
+
+void Deformer::prepare(const Positions& P, const Faces& F, const Region& region) {
   prepared_ = false;
-  region.validate(mesh);
+  frame_report_ = {};
+  const bool surface = traits().domain == DeformerDomain::Surface;
+  check_mesh_arrays(P, F, name().c_str());
+  if (surface && F.rows() == 0)
+    throw InvalidInput(name() + ": a surface method needs triangles, and the input has none");
+  region.validate(static_cast<int>(P.rows()), surface ? &F : nullptr);
   if (region.num_handles() == 0)
     throw InvalidInput(name() + ": the region has no handle vertex (selection code 2 or higher); nothing to move");
-  do_prepare(mesh, region);
+  do_prepare(P, F, region);
   num_handles_ = region.num_handles();
   num_vertices_ = region.num_vertices();
+  num_constrained_ = static_cast<int>(region.constrained_vertices().size());
   prepared_ = true;
 }
 
-void Deformer::deform(const std::vector<Mat4>& transforms, Positions& out) {
-  if (!prepared_) throw UsageError(name() + ": deform() called before prepare()");
-  if (static_cast<int>(transforms.size()) != num_handles_)
-    throw UsageError(name() + ": " + std::to_string(transforms.size()) + " handle transforms given, the region has " +
-                     std::to_string(num_handles_) + " handle(s)");
-  check_affine(transforms, name().c_str());
+void Deformer::prepare(const Mesh& mesh, const Region& region) { prepare(positions(mesh), faces(mesh), region); }
+
+void Deformer::begin_frame(Positions& out) {
+  if (!prepared_) throw UsageError(name() + ": a frame was asked for before prepare()");
   if (out.rows() != num_vertices_) out.resize(num_vertices_, 3);
-  do_deform(transforms, out);
+  frame_report_.iterations = 0;
+  frame_report_.residual = -1;
+  frame_report_.converged = true;
+  frame_report_.folded_faces = -1;
+  frame_report_.constraint_error = -1;
+  frame_report_.warnings.clear();
+}
+
+void Deformer::end_frame(const Positions& out) {
   if (!out.allFinite())
     for (Eigen::Index v = 0; v < out.rows(); ++v)
       if (!out.row(v).allFinite())
         throw SolverError(name() + ": the frame gave vertex " + std::to_string(v) + " a non-finite position",
                           static_cast<int>(v));
+  if (!frame_report_.converged)
+    frame_report_.warnings.push_back(name() + ": stopped after " + std::to_string(frame_report_.iterations) +
+                                     " iterations with relative residual " + std::to_string(frame_report_.residual) +
+                                     "; raise the iteration limit or the tolerance");
+}
+
+void Deformer::deform(const std::vector<Mat4>& transforms, Positions& out) {
+  if (prepared_ && static_cast<int>(transforms.size()) != num_handles_)
+    throw UsageError(name() + ": " + std::to_string(transforms.size()) + " handle transforms given, the region has " +
+                     std::to_string(num_handles_) + " handle(s)");
+  begin_frame(out);
+  check_affine(transforms, name());
+  do_deform(transforms, out);
+  end_frame(out);
 }
 
 Positions Deformer::deform(const std::vector<Mat4>& transforms) {
   Positions out;
   deform(transforms, out);
   return out;
+}
+
+void Deformer::deform_to(const Positions& targets, Positions& out) {
+  if (!traits().vertex_targets)
+    throw UsageError(name() + " takes one affine transform per handle, not per-vertex targets (traits().vertex_targets "
+                              "is false); use deform()");
+  if (prepared_ && targets.rows() != num_constrained_)
+    throw UsageError(name() + ": " + std::to_string(targets.rows()) + " targets given for " +
+                     std::to_string(num_constrained_) + " constrained (fixed and handle) vertices");
+  begin_frame(out);
+  check_finite(targets, name().c_str(), "the targets");
+  do_deform_to(targets, out);
+  end_frame(out);
+}
+
+void Deformer::do_deform_to(const Positions&, Positions&) {
+  throw UsageError(name() + ": declares vertex targets but does not implement them");
+}
+
+void Deformer::set_initial_guess(const Positions& X) {
+  if (traits().solve != DeformerSolve::Iterative)
+    throw UsageError(name() + " is a linear method: a frame does not depend on an initial guess");
+  if (!prepared_) throw UsageError(name() + ": set_initial_guess() called before prepare()");
+  if (X.rows() != num_vertices_)
+    throw UsageError(name() + ": the initial guess has " + std::to_string(X.rows()) + " rows for " +
+                     std::to_string(num_vertices_) + " vertices");
+  check_finite(X, name().c_str(), "the initial guess");
+  do_set_initial_guess(X);
+}
+
+void Deformer::do_set_initial_guess(const Positions&) {
+  throw UsageError(name() + ": declares itself iterative but takes no initial guess");
+}
+
+void Deformer::reset() {
+  frame_report_ = {};
+  if (prepared_) do_reset();
+}
+
+void Deformer::evaluate(const Positions& points, Positions& out) const {
+  if (traits().domain != DeformerDomain::Space)
+    throw UsageError(name() + " is a surface method: it moves the mesh's own vertices and has no map of space to "
+                              "evaluate at other points");
+  if (!prepared_) throw UsageError(name() + ": evaluate() called before prepare()");
+  check_finite(points, name().c_str(), "the points");
+  if (out.rows() != points.rows()) out.resize(points.rows(), 3);
+  do_evaluate(points, out);
+}
+
+void Deformer::do_evaluate(const Positions&, Positions&) const {
+  throw UsageError(name() + ": declares itself a space method but cannot evaluate its map");
 }
 
 }  // namespace msd

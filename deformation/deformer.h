@@ -1,6 +1,8 @@
 #pragma once
-//! \file The editing-operator interface: every deformation method (surface, space, multi-scale) is a
-//! Deformer, so the CLI and the comparison app iterate over them by name.
+//! \file The editing seam: every deformation method (surface or space, linear or iterative, multi-scale)
+//! is a Deformer. It is prepared once from arrays (positions, faces that may be none or a soup, a region)
+//! and then driven frame by frame, so the command line, the comparison and the tests treat all methods
+//! alike and read what each one can do from its traits.
 
 #include <string>
 #include <vector>
@@ -10,26 +12,65 @@
 
 namespace msd {
 
-//! What the last frame measured about its own result (the cheap checks: a frame never returns a result
-//! that was not checked). Fields a method does not measure stay at −1.
-struct FrameReport {
-  //! Multi-scale methods: triangles of S' whose normal turned against the deformed base's, relative to
-  //! the rest pose (local self-intersections of the details, seed 9.3.3 and Fig. 9.10). O(#F) per frame.
-  int folded_faces = -1;
+//! Where a method works (seed 9.1–9.4 surface methods, 9.5–9.6 space deformations).
+enum class DeformerDomain {
+  Surface,  //!< deforms the mesh's own vertices through its triangles; prepare() needs faces
+  Space,    //!< deforms the space around the shape: any points, with or without faces (evaluate())
 };
 
-//! Maps one affine transform per handle to deformed vertex positions.
-//! prepare() once per mesh and region (factorisations, basis fields); deform() per frame: O(#V) and
-//! allocation-free once `out` has the right size. Not thread-safe: a frame may use internal workspace.
+//! How a frame is computed.
+enum class DeformerSolve {
+  Linear,     //!< a fixed linear map of the handle data: O(#V), no heap allocation once `out` is sized
+  Iterative,  //!< iterations from an initial guess (the last frame, set_initial_guess(), or rest after reset())
+};
+
+//! What a method declares about itself; the conformance tests check every promise made here.
+struct DeformerTraits {
+  DeformerDomain domain = DeformerDomain::Surface;
+  DeformerSolve solve = DeformerSolve::Linear;
+  //! Accepts explicit target positions for the constrained vertices (deform_to()), not only one affine
+  //! transform per handle.
+  bool vertex_targets = false;
+  //! Fixed vertices stay and handle vertices reach T_k p exactly (to round-off). False: the constraints
+  //! are met in the least-squares sense (e.g. a coarse lattice), and the frame report says by how much.
+  bool exact_constraints = true;
+  //! Moving every constrained vertex by one rigid motion moves the whole shape by it.
+  bool reproduces_rigid_motions = true;
+};
+
+//! What the last frame measured about its own result: a frame never returns a result that was not
+//! checked. Fields a method does not measure keep their defaults.
+struct FrameReport {
+  int iterations = 0;      //!< iterative methods: iterations of the frame (0 for linear ones)
+  double residual = -1;    //!< iterative methods: relative residual at exit (−1: not measured)
+  bool converged = true;   //!< false when an iterative method stopped at its iteration limit
+  //! Multi-scale methods: triangles of S' whose normal turned against the deformed base's, relative to
+  //! the rest pose (local self-intersections of the details, seed 9.3.3 and Fig. 9.10).
+  int folded_faces = -1;
+  //! Largest distance of a constrained vertex from its target (measured by methods that do not meet the
+  //! constraints exactly; −1: not measured).
+  double constraint_error = -1;
+  //! What the user should know about this frame (folds, no convergence), each naming a remedy. Empty in
+  //! a clean frame (clearing it allocates nothing).
+  std::vector<std::string> warnings;
+};
+
+//! Maps handle data to deformed positions. prepare() once per shape and region (factorisations, basis
+//! fields); then deform() per frame. Not thread-safe: a frame may use internal workspace.
 class Deformer {
  public:
   virtual ~Deformer() = default;
-  //! Short method name, e.g. "shell", "propagate", "multiscale".
-  virtual std::string name() const = 0;
+  //! Short method name, e.g. "shell", "propagate", "multiscale-normal" (stored: no allocation per call).
+  virtual const std::string& name() const = 0;
+  virtual DeformerTraits traits() const = 0;
 
-  //! Precomputes everything that depends only on the rest shape and the region. Validates the region
-  //! (see Region::validate) and requires at least one handle.
+  //! Precomputes everything that depends only on the rest shape and the region. P: #V by 3 positions;
+  //! F: #F by 3 triangles (surface methods need at least one; space methods take none or a soup);
+  //! region: #V codes with at least one handle. Checks the arrays (finite, indices in range) and the
+  //! region (Region::validate, with F for surface methods).
   //! \throw InvalidInput, TopologyError, SolverError naming what is wrong.
+  void prepare(const Positions& P, const Faces& F, const Region& region);
+  //! The same from a Mesh (converted once).
   void prepare(const Mesh& mesh, const Region& region);
 
   //! One frame: transforms[k] moves handle k (4x4 affine). Writes #V by 3 positions into out (resized
@@ -38,28 +79,58 @@ class Deformer {
   //! a non-finite coordinate.
   void deform(const std::vector<Mat4>& transforms, Positions& out);
   Positions deform(const std::vector<Mat4>& transforms);
+  //! One frame with explicit targets: #C by 3 positions, one per vertex of
+  //! Region::constrained_vertices() in that order (fixed vertices usually at rest). \throw UsageError
+  //! unless traits().vertex_targets, before prepare, or for a wrong row count; InvalidInput for a
+  //! non-finite target; SolverError as deform().
+  void deform_to(const Positions& targets, Positions& out);
+
+  //! Iterative methods: the next frame starts from X (#V by 3) instead of the last frame's result.
+  //! \throw UsageError for a linear method, before prepare, or for a wrong shape; InvalidInput if X is
+  //! not finite.
+  void set_initial_guess(const Positions& X);
+  //! Back to the rest pose: the next frame of an iterative method starts from rest, a space method's map
+  //! is the identity again, and the frame report is cleared. Factorisations are kept.
+  void reset();
+
+  //! Space methods: the map of the last frame (the identity before the first frame or after reset())
+  //! applied to arbitrary points (#N by 3) into out (#N by 3), e.g. a point cloud or another mesh
+  //! sharing the space (seed 9.5, 9.6). \throw UsageError for a surface method or before prepare;
+  //! InvalidInput for a non-finite point.
+  void evaluate(const Positions& points, Positions& out) const;
 
   bool prepared() const { return prepared_; }
-  //! What the last deform() measured (see FrameReport).
   const FrameReport& frame_report() const { return frame_report_; }
   int num_handles() const { return num_handles_; }
   int num_vertices() const { return num_vertices_; }
 
  protected:
-  //! Method-specific precomputation; the region is already validated and has >= 1 handle.
-  virtual void do_prepare(const Mesh& mesh, const Region& region) = 0;
-  //! Method-specific frame; transforms are checked and out has #V rows. deform() checks afterwards that
-  //! every position is finite.
+  //! Method-specific precomputation; arrays and region are already checked, the region has >= 1 handle.
+  virtual void do_prepare(const Positions& P, const Faces& F, const Region& region) = 0;
+  //! Method-specific frame; transforms are checked, out has #V rows, frame_report_ is reset to its
+  //! defaults. deform() checks afterwards that every position is finite.
   virtual void do_deform(const std::vector<Mat4>& transforms, Positions& out) = 0;
+  //! Methods with traits().vertex_targets: targets checked (#C by 3, finite), out has #V rows.
+  virtual void do_deform_to(const Positions& targets, Positions& out);
+  virtual void do_set_initial_guess(const Positions& X);
+  virtual void do_reset() {}
+  virtual void do_evaluate(const Positions& points, Positions& out) const;
 
-  FrameReport frame_report_;  //!< filled by do_deform() where the method measures something
+  FrameReport frame_report_;  //!< filled by the frame where the method measures something
 
  private:
+  void begin_frame(Positions& out);
+  void end_frame(const Positions& out);
   bool prepared_ = false;
-  int num_handles_ = 0, num_vertices_ = 0;
+  int num_handles_ = 0, num_vertices_ = 0, num_constrained_ = 0;
 };
 
 //! Throws InvalidInput unless every transform is finite with last row (0 0 0 1); `who` prefixes the message.
-void check_affine(const std::vector<Mat4>& transforms, const char* who);
+void check_affine(const std::vector<Mat4>& transforms, const std::string& who);
+
+//! The targets of an affine frame: #C by 3, row c is p or T_k p for the c-th constrained vertex of the
+//! region (Region::constrained_vertices() order), for methods that solve for explicit targets.
+void affine_targets(const Positions& rest, const std::vector<int>& constrained, const std::vector<int>& handle_of,
+                    const std::vector<Mat4>& transforms, Positions& targets);
 
 }  // namespace msd

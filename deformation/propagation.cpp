@@ -10,6 +10,7 @@
 
 #include <Eigen/SVD>
 
+#include "core/checks.h"
 #include "core/errors.h"
 #include "core/laplacian.h"
 #include "core/parallel.h"
@@ -187,7 +188,7 @@ struct HeatGeodesics::Impl {
         if (F(f, k) < 0 || F(f, k) >= n)
           throw InvalidInput("HeatGeodesics: face " + std::to_string(f) + " refers to vertex " + std::to_string(F(f, k)) +
                              " of a mesh with " + std::to_string(n) + " vertices");
-    CotanLaplacian lap = cotan_laplacian(P, F);
+    LaplaceOperator lap = cotan_laplacian(P, F);
     W = std::move(lap.W);
     mass = std::move(lap.mass);
     G = gradient_operator(P, F);
@@ -399,12 +400,14 @@ Eigen::MatrixXd raw_fields(const Positions& P, const Faces& F, const Region& reg
 
 }  // namespace
 
-Eigen::VectorXd propagation_field(const Mesh& mesh, const Region& region, PropagationField field, int handle) {
-  region.validate(mesh);
+Eigen::VectorXd propagation_field(const Positions& P, const Faces& F, const Region& region, PropagationField field,
+                                  int handle) {
+  check_mesh_arrays(P, F, "propagation_field");
+  region.validate(static_cast<int>(P.rows()), &F);
   if (handle < 0 || handle >= region.num_handles())
     throw InvalidInput("propagation_field: handle " + std::to_string(handle) + " requested, the region has " +
                        std::to_string(region.num_handles()) + " handle(s)");
-  return raw_fields(positions(mesh), faces(mesh), region, field, HeatGeodesicsOptions{}).col(handle);
+  return raw_fields(P, F, region, field, HeatGeodesicsOptions{}).col(handle);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -426,10 +429,9 @@ TransformationPropagation::TransformationPropagation(PropagationOptions options)
                        std::to_string(options_.geodesic.time_factor) + ")");
 }
 
-void TransformationPropagation::do_prepare(const Mesh& mesh, const Region& region) {
-  const Positions P = positions(mesh);
+void TransformationPropagation::do_prepare(const Positions& P, const Faces& F, const Region& region) {
   const int n = static_cast<int>(P.rows()), nh = region.num_handles();
-  Eigen::MatrixXd S = raw_fields(P, faces(mesh), region, options_.field, options_.geodesic);
+  Eigen::MatrixXd S = raw_fields(P, F, region, options_.field, options_.geodesic);
 
   // Transfer function on free vertices only: constrained vertices keep exactly 1 / 0.
   if (options_.transfer != PropagationTransfer::Linear) {

@@ -95,7 +95,7 @@ class HeatGeodesics {
 Eigen::VectorXd geodesic_distance(const Positions& P, const Faces& F, const std::vector<int>& sources,
                                   HeatGeodesicsOptions options = {});
 
-//! The raw propagation field of one handle on the mesh's vertices (no transfer function): #V values in
+//! The raw propagation field of one handle on the vertices of (P #V×3, F #F×3) (no transfer function): #V values in
 //! [0, 1], exactly 1 on handle `handle`, exactly 0 on fixed vertices and on the other handles.
 //! Several handles: handle k's field treats the other handles like the fixed part (distance fields use
 //! dist_F = distance to fixed ∪ other handles in (9.1); the harmonic field is 0 on them in (9.2)).
@@ -105,7 +105,8 @@ Eigen::VectorXd geodesic_distance(const Positions& P, const Faces& F, const std:
 //! weights are negative).
 //! \throw InvalidInput / TopologyError from Region::validate, InvalidInput if handle is not in
 //! [0, region.num_handles()); SolverError if a system is singular.
-Eigen::VectorXd propagation_field(const Mesh& mesh, const Region& region, PropagationField field, int handle = 0);
+Eigen::VectorXd propagation_field(const Positions& P, const Faces& F, const Region& region, PropagationField field,
+                                  int handle = 0);
 
 struct PropagationOptions {
   PropagationField field = PropagationField::Harmonic;
@@ -129,7 +130,9 @@ class TransformationPropagation : public Deformer {
   //! \throw InvalidInput if transfer is Custom without custom_transfer, custom_transfer is set with
   //! another transfer (it would be ignored), or time_factor is not positive and finite.
   explicit TransformationPropagation(PropagationOptions options = {});
-  std::string name() const override { return "propagate"; }
+  const std::string& name() const override { return name_; }
+  //! Surface, linear, exact constraints, reproduces rigid motions; affine handles only.
+  DeformerTraits traits() const override { return {}; }
   const PropagationOptions& options() const { return options_; }
 
   //! #V by #handles weights used per frame: column k is handle k's field after the transfer function
@@ -139,7 +142,7 @@ class TransformationPropagation : public Deformer {
  protected:
   //! \throw InvalidInput for a custom transfer value outside [0, 1] (naming the vertex and value);
   //! SolverError if a field's system is singular.
-  void do_prepare(const Mesh& mesh, const Region& region) override;
+  void do_prepare(const Positions& P, const Faces& F, const Region& region) override;
   void do_deform(const std::vector<Mat4>& transforms, Positions& out) override;
 
  private:
@@ -154,6 +157,7 @@ class TransformationPropagation : public Deformer {
     double angle = 0;             // rotation angle of R, in [0, π]
   };
 
+  std::string name_ = "propagate";
   PropagationOptions options_;
   Positions rest_;
   Eigen::MatrixXd weights_;            // #V by h

@@ -15,15 +15,20 @@ ShellDeformer::ShellDeformer(ShellOptions options) : options_(options) {
                        std::to_string(options_.ks) + ", kb = " + std::to_string(options_.kb) + ")");
 }
 
-void ShellDeformer::do_prepare(const Mesh& mesh, const Region& region) {
-  rest_ = positions(mesh);
-  const Faces F = faces(mesh);
+DeformerTraits ShellDeformer::traits() const {
+  DeformerTraits t;
+  t.vertex_targets = true;
+  return t;
+}
+
+void ShellDeformer::do_prepare(const Positions& P, const Faces& F, const Region& region) {
+  rest_ = P;
   const int nv = static_cast<int>(rest_.rows()), nh = region.num_handles();
-  const CotanLaplacian lap = cotan_laplacian(rest_, F);
-  // (9.7) in symmetric form: multiply −ks·L + kb·L² (L = M⁻¹W) by M.
+  const LaplaceOperator lap = cotan_laplacian(rest_, F);
+  // (9.7) in symmetric form: −ks·L + kb·L² (L = M⁻¹W) multiplied by M is ks·Q₁ + kb·Q₂.
   SparseMatrix Q(nv, nv);
-  if (options_.ks > 0) Q = -options_.ks * lap.W;
-  if (options_.kb > 0) Q += options_.kb * SparseMatrix(lap.W * lap.mass.cwiseInverse().asDiagonal() * lap.W);
+  if (options_.ks > 0) Q = options_.ks * polyharmonic_matrix(lap, 1);
+  if (options_.kb > 0) Q += options_.kb * polyharmonic_matrix(lap, 2);
   constrained_ = region.constrained_vertices();
   try {
     system_.prepare(Q, constrained_);
@@ -76,27 +81,22 @@ void ShellDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
   }, 1 << 15);
 }
 
-void ShellDeformer::deform_displacements(const Positions& constrained, Positions& out) const {
-  if (!prepared()) throw UsageError("shell: deform_displacements() called before prepare()");
-  if (constrained.rows() != static_cast<Eigen::Index>(constrained_.size()))
-    throw UsageError("shell: " + std::to_string(constrained.rows()) + " constraint displacements for " +
-                     std::to_string(constrained_.size()) + " constrained vertices");
-  if (!constrained.allFinite()) throw InvalidInput("shell: constraint displacements contain NaN or inf");
-  Eigen::MatrixXd d;
-  system_.solve(constrained, d);
-  out = rest_ + d;
+void ShellDeformer::do_deform_to(const Positions& targets, Positions& out) {
+  Positions d = targets;
+  for (size_t c = 0; c < constrained_.size(); ++c) d.row(c) -= rest_.row(constrained_[c]);
+  Eigen::MatrixXd x;
+  system_.solve(d, x);
+  out = rest_ + x;
 }
 
 void ShellDeformer::deform_by_solve(const std::vector<Mat4>& transforms, Positions& out) {
   Positions check;
   deform(transforms, check);  // validates the frame exactly like deform()
-  Positions d(constrained_.size(), 3);
-  for (size_t c = 0; c < constrained_.size(); ++c) {
-    const int v = constrained_[c], k = handle_of_[v];
-    const Vec3 p = rest_.row(v);
-    d.row(c) = k < 0 ? Vec3::Zero() : Vec3(transform_point(transforms[k], p) - p);
-  }
-  deform_displacements(d, out);
+  std::vector<int> handle_of(constrained_.size());
+  for (size_t c = 0; c < constrained_.size(); ++c) handle_of[c] = handle_of_[constrained_[c]];
+  Positions targets;
+  affine_targets(rest_, constrained_, handle_of, transforms, targets);
+  deform_to(targets, out);
 }
 
 }  // namespace msd

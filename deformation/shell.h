@@ -26,26 +26,28 @@ struct ShellOptions {
 class ShellDeformer : public Deformer {
  public:
   explicit ShellDeformer(ShellOptions options = {});
-  std::string name() const override { return "shell"; }
+  const std::string& name() const override { return name_; }
+  //! Surface, linear, exact constraints, reproduces rigid motions, accepts per-vertex targets.
+  DeformerTraits traits() const override;
   const ShellOptions& options() const { return options_; }
-
-  //! Arbitrary (non-affine) constraint displacements: `constrained` is #C by 3, one row per vertex of
-  //! Region::constrained_vertices() in that order (fixed rows usually zero). One back-substitution with
-  //! the stored factorisation. Writes #V by 3 positions. \throw UsageError before prepare or on shape.
-  void deform_displacements(const Positions& constrained, Positions& out) const;
 
   //! The same frame as deform(), but by a direct back-substitution instead of the basis: the reference
   //! the basis path is tested against. \throw as deform().
   void deform_by_solve(const std::vector<Mat4>& transforms, Positions& out);
+  //! Region::constrained_vertices() of the prepared region, ascending.
+  const std::vector<int>& constrained_vertices() const { return constrained_; }
 
   //! Basis fields: #V by 4h (handle k in columns 4k..4k+3); rows of handle vertices hold (p, 1).
   Eigen::MatrixXd basis() const { return fields_.rightCols(fields_.cols() - 3); }
 
  protected:
-  void do_prepare(const Mesh& mesh, const Region& region) override;
+  void do_prepare(const Positions& P, const Faces& F, const Region& region) override;
   void do_deform(const std::vector<Mat4>& transforms, Positions& out) override;
+  //! One back-substitution for the displacements targets − rest.
+  void do_deform_to(const Positions& targets, Positions& out) override;
 
  private:
+  std::string name_ = "shell";
   ShellOptions options_;
   Positions rest_;
   std::vector<int> constrained_;

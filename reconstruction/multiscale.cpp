@@ -117,7 +117,10 @@ double free_area_ratio(const Positions& S, const Positions& B, const Faces& F, c
 const char* to_string(BaseKind kind) { return kind == BaseKind::LowPass ? "low-pass" : "fairing"; }
 
 MultiscaleDeformer::MultiscaleDeformer(MultiscaleOptions options)
-    : options_(std::move(options)), shell_(options_.shell), encoding_(make_encoding(options_.encoding)) {
+    : options_(std::move(options)),
+      name_("multiscale-" + options_.encoding),
+      shell_(options_.shell),
+      encoding_(make_encoding(options_.encoding)) {
   if (!(options_.remesh_base_edge_length >= 0) || !std::isfinite(options_.remesh_base_edge_length))
     throw InvalidInput("multiscale: the base remeshing edge length must be finite and >= 0 (0 = no remeshing)");
   if (!(options_.low_pass.detail_scale >= 0) || !std::isfinite(options_.low_pass.detail_scale))
@@ -127,9 +130,13 @@ MultiscaleDeformer::MultiscaleDeformer(MultiscaleOptions options)
                        "the normal, volumes or transfer encoding");
 }
 
-void MultiscaleDeformer::do_prepare(const Mesh& mesh, const Region& region) {
-  const Positions S = positions(mesh);
-  const Faces F = faces(mesh);
+DeformerTraits MultiscaleDeformer::traits() const {
+  DeformerTraits t;
+  if (options_.encoding == "volumes") t.solve = DeformerSolve::Iterative;
+  return t;
+}
+
+void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Region& region) {
   decomposition_ = {};
   decomposition_.base = options_.base;
   if (options_.base == BaseKind::LowPass) {
@@ -138,7 +145,7 @@ void MultiscaleDeformer::do_prepare(const Mesh& mesh, const Region& region) {
   } else {
     FairingOptions fairing;
     fairing.order = options_.fairing;
-    base_ = fair_region(mesh, region, fairing);
+    base_ = fair_region(S, F, region, fairing);
     decomposition_.check = check_details(S, base_, F);
   }
   decomposition_.area_ratio = free_area_ratio(S, base_, F, region);
@@ -154,7 +161,7 @@ void MultiscaleDeformer::do_prepare(const Mesh& mesh, const Region& region) {
     base_faces_ = std::move(r.F);
   }
   try {
-    shell_.prepare(make_mesh(base_, base_faces_), base_region);
+    shell_.prepare(base_, base_faces_, base_region);
   } catch (const Error& e) {
     throw SolverError(std::string("multiscale: the shell operator on the base B (not the input mesh) failed; the "
                                   "base is degenerate there, try a smaller detail scale: ") + e.what());

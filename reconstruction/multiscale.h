@@ -80,7 +80,8 @@ class MultiscaleDeformer : public Deformer {
  public:
   //! \throw InvalidInput for an unknown encoding or invalid shell stiffnesses.
   explicit MultiscaleDeformer(MultiscaleOptions options = {});
-  std::string name() const override { return "multiscale-" + options_.encoding; }
+  const std::string& name() const override { return name_; }
+  DeformerTraits traits() const override;
   const MultiscaleOptions& options() const { return options_; }
 
   const Positions& base() const { return base_; }                    //!< B, #Vb by 3
@@ -91,11 +92,12 @@ class MultiscaleDeformer : public Deformer {
   const DecompositionReport& decomposition_report() const { return decomposition_; }
 
  protected:
-  void do_prepare(const Mesh& mesh, const Region& region) override;
+  void do_prepare(const Positions& S, const Faces& F, const Region& region) override;
   void do_deform(const std::vector<Mat4>& transforms, Positions& out) override;
 
  private:
   MultiscaleOptions options_;
+  std::string name_;
   ShellDeformer shell_;
   std::unique_ptr<DetailEncoding> encoding_;
   Positions base_, base_deformed_;

@@ -12,6 +12,7 @@ SubdivisionMultiscaleDeformer::SubdivisionMultiscaleDeformer(Positions coarse, F
       coarse_faces_(std::move(coarse_faces)),
       refinement_(std::move(refinement)),
       encoding_name_(encoding),
+      name_("multiscale-subdivision-" + encoding),
       shell_(shell),
       encoding_(make_encoding(encoding)) {
   if (refinement_.loop.cols() != coarse_.rows())
@@ -19,15 +20,13 @@ SubdivisionMultiscaleDeformer::SubdivisionMultiscaleDeformer(Positions coarse, F
                        " coarse vertices, the control mesh " + std::to_string(coarse_.rows()));
 }
 
-void SubdivisionMultiscaleDeformer::do_prepare(const Mesh& mesh, const Region& region) {
-  const Positions S = positions(mesh);
-  const Faces F = faces(mesh);
+void SubdivisionMultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Region& region) {
   if (F.rows() != refinement_.faces.rows() || F != refinement_.faces)
     throw InvalidInput("multiscale-subdivision: the mesh is not the Loop refinement of the control mesh "
                        "(its faces differ); use the multiscale method for general meshes");
   hierarchy_.build(S, F, coarse_, coarse_faces_, refinement_);  // B = Loop(control points), D = S − B
   coarse_region_ = hierarchy_.coarse_region(region);
-  shell_.prepare(make_mesh(hierarchy_.control_points(), coarse_faces_), coarse_region_);
+  shell_.prepare(hierarchy_.control_points(), coarse_faces_, coarse_region_);
   encoding_->set_anchor_vertices(region.constrained_vertices());
   encoding_->encode(S, F, hierarchy_.base(), F);
   coarse_deformed_ = hierarchy_.control_points();

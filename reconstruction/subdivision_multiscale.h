@@ -21,7 +21,8 @@ class SubdivisionMultiscaleDeformer : public Deformer {
   //! \throw InvalidInput for an unknown encoding or a refinement that does not match the coarse mesh.
   SubdivisionMultiscaleDeformer(Positions coarse, Faces coarse_faces, LoopRefinement refinement,
                                 const std::string& encoding = "vectors", ShellOptions shell = {});
-  std::string name() const override { return "multiscale-subdivision-" + encoding_name_; }
+  const std::string& name() const override { return name_; }
+  DeformerTraits traits() const override { return {}; }
 
   const SubdivisionHierarchy& hierarchy() const { return hierarchy_; }
   const Region& coarse_region() const { return coarse_region_; }
@@ -29,7 +30,7 @@ class SubdivisionMultiscaleDeformer : public Deformer {
  protected:
   //! \throw InvalidInput if the mesh is not the refinement (other faces), TopologyError if the region
   //! leaves no fixed or handle vertex on the coarse mesh.
-  void do_prepare(const Mesh& mesh, const Region& region) override;
+  void do_prepare(const Positions& S, const Faces& F, const Region& region) override;
   //! Shell on the coarse mesh, stencil product to B', then S' = B' ⊕ D: O(#V), allocation-free.
   void do_deform(const std::vector<Mat4>& transforms, Positions& out) override;
 
@@ -37,7 +38,7 @@ class SubdivisionMultiscaleDeformer : public Deformer {
   Positions coarse_;
   Faces coarse_faces_;
   LoopRefinement refinement_;
-  std::string encoding_name_;
+  std::string encoding_name_, name_;
   ShellDeformer shell_;
   std::unique_ptr<DetailEncoding> encoding_;
   SubdivisionHierarchy hierarchy_;

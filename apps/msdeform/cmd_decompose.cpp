@@ -51,7 +51,7 @@ void add_decompose_command(CLI::App& app) {
     if (fairing) {
       FairingOptions options;
       options.order = static_cast<FairingOrder>(*order);
-      B = fair_region(c.mesh, c.region, options);
+      B = fair_region(S, F, c.region, options);
     } else {
       B = low_pass_base(S, F, *low_pass, &report);
     }

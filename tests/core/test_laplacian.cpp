@@ -34,7 +34,7 @@ TEST_CASE("cotan Laplacian: constants in the kernel, symmetric, mass sums to the
     P = positions(m);
     F = faces(m);
   }
-  const CotanLaplacian lap = cotan_laplacian(P, F);
+  const LaplaceOperator lap = cotan_laplacian(P, F);
   CHECK(lap.degenerate_faces == 0);
   const Eigen::VectorXd ones = Eigen::VectorXd::Ones(P.rows());
   CHECK((lap.W * ones).cwiseAbs().maxCoeff() <= 1e-12 * max_abs(lap.W));
@@ -48,7 +48,7 @@ TEST_CASE("cotan Laplacian: linear precision at interior vertices of a planar me
   Faces F;
   std::vector<bool> interior;
   test::jittered_grid(12, 0.3, P, F, interior);
-  const CotanLaplacian lap = cotan_laplacian(P, F);
+  const LaplaceOperator lap = cotan_laplacian(P, F);
   const Eigen::VectorXd f = 2.0 * P.col(0) - 3.0 * P.col(1) + Eigen::VectorXd::Constant(P.rows(), 0.5);
   const Eigen::VectorXd Wf = lap.W * f;
   for (int i = 0; i < P.rows(); ++i)
@@ -61,7 +61,7 @@ TEST_CASE("cotan Laplacian of a sphere approximates -2H n, better with refinemen
     Positions P;
     Faces F;
     test::icosphere(level, P, F);
-    const CotanLaplacian lap = cotan_laplacian(P, F);
+    const LaplaceOperator lap = cotan_laplacian(P, F);
     const Positions HN = lap.mass.cwiseInverse().asDiagonal() * (lap.W * P);
     // Unit sphere: Δp = -2 H n = -2 p.
     const double err = (HN + 2.0 * P).rowwise().norm().maxCoeff() / 2.0;
@@ -87,7 +87,7 @@ TEST_CASE("gradient of a linear function is exact, divergence of gradient is W",
     REQUIRE((g.segment<3>(3 * t) - expected).norm() <= 1e-12 * a.norm());
   }
   const SparseMatrix DG = divergence_operator(P, F) * G;
-  const CotanLaplacian lap = cotan_laplacian(P, F);
+  const LaplaceOperator lap = cotan_laplacian(P, F);
   CHECK(max_abs(SparseMatrix(DG - lap.W)) <= 1e-12 * max_abs(lap.W));
 }
 
@@ -104,7 +104,7 @@ TEST_CASE("degenerate and needle triangles give finite operators and are reporte
       0, 3, 1,   //
       1, 3, 4,   //
       0, 5, 1;
-  const CotanLaplacian lap = cotan_laplacian(P, F);
+  const LaplaceOperator lap = cotan_laplacian(P, F);
   CHECK(lap.degenerate_faces == 1);
   CHECK(lap.clamped_cotangents >= 1);
   for (int k = 0; k < lap.W.outerSize(); ++k)
@@ -135,7 +135,7 @@ TEST_CASE("cotan Laplacian: negative semi-definite for any triangle, needles inc
       const double t = trial % 4 == 1 ? 0.5 : 1e-9;
       P.row(2) = (1 - t) * P.row(0) + t * P.row(1) + 1e-8 * Eigen::RowVector3d(u(rng), u(rng), u(rng));
     }
-    const CotanLaplacian L = cotan_laplacian(P, F);
+    const LaplaceOperator L = cotan_laplacian(P, F);
     const Eigen::Matrix3d W = Eigen::MatrixXd(L.W);
     const double largest = W.cwiseAbs().maxCoeff();
     const Eigen::Vector3d eig = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(W).eigenvalues();

@@ -36,14 +36,16 @@ TEST_CASE("real selections load: knight groups and CGAL's cactus benchmark", "[c
   const Region groups = read_dmat_groups(test::shared_data("decimated-knight-selection.dmat"), 502);
   CHECK(groups.num_handles() == 3);
   CHECK_FALSE(groups.free_vertices().empty());
-  groups.validate(knight);
+  const Faces knight_faces = faces(knight);
+  groups.validate(502, &knight_faces);
 
   const Mesh cactus = load_mesh(test::cgal_mesh("cactus.off"));
   const Region sel = read_sel(test::cgal_deformation_data("cactus.sel"), static_cast<int>(cactus.n_vertices()));
   CHECK(sel.fixed_vertices().size() == 68);
   CHECK(sel.free_vertices().size() == 465);
   CHECK(sel.handle_vertices(0).size() == 87);
-  sel.validate(cactus);
+  const Faces cactus_faces = faces(cactus);
+  sel.validate(static_cast<int>(cactus.n_vertices()), &cactus_faces);
   const auto def = read_def(test::cgal_deformation_data("cactus.def"));
   REQUIRE(def.size() == 1);
   CHECK(def[0](0, 0) == Approx(0.999641));
@@ -81,16 +83,17 @@ TEST_CASE("region validation names an unconstrained free component", "[core][reg
   P << 0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 0, 0, 6, 0, 0, 5, 1, 0;
   Faces F(2, 3);
   F << 0, 1, 2, 3, 4, 5;
-  const Mesh mesh = make_mesh(P, F);
   Region r(6);
   r.set_fixed({0});
   r.set_handle({1}, 0);
-  CHECK_THROWS_AS(r.validate(mesh), TopologyError);
-  CHECK_THROWS_WITH(r.validate(mesh), Contains("free component 1") && Contains("3 vertices") && Contains("vertex 3"));
+  CHECK_THROWS_AS(r.validate(6, &F), TopologyError);
+  CHECK_THROWS_WITH(r.validate(6, &F), Contains("free component 1") && Contains("3 vertices") && Contains("vertex 3"));
   r.set_fixed({4});
-  CHECK_NOTHROW(r.validate(mesh));
-  CHECK_THROWS_WITH(Region(5).validate(mesh), Contains("5 vertex labels but the mesh has 6"));
+  CHECK_NOTHROW(r.validate(6, &F));
+  CHECK_THROWS_WITH(Region(5).validate(6, &F), Contains("5 vertex labels but the mesh has 6"));
   Region gap(6);
   gap.set_handle({0, 3}, 1);  // handle 0 empty
-  CHECK_THROWS_WITH(gap.validate(mesh), Contains("handle 0") && Contains("no vertex"));
+  CHECK_THROWS_WITH(gap.validate(6, &F), Contains("handle 0") && Contains("no vertex"));
+  r.set_free({4});
+  CHECK_NOTHROW(r.validate(6));  // without faces (a space method) components are not checked
 }

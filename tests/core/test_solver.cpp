@@ -13,7 +13,7 @@ namespace {
 // Bi-Laplacian plus a small Laplacian term on a sphere: a realistic SPD-after-constraints matrix.
 SparseMatrix test_matrix(Positions& P, Faces& F) {
   test::icosphere(2, P, F);
-  const CotanLaplacian lap = cotan_laplacian(P, F);
+  const LaplaceOperator lap = cotan_laplacian(P, F);
   return SparseMatrix(-lap.W + lap.W * lap.mass.cwiseInverse().asDiagonal() * lap.W);
 }
 }  // namespace

@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include "core/adjacency.h"
+#include "core/checks.h"
 #include "core/errors.h"
 #include "core/laplacian.h"
 #include "core/scenes.h"
@@ -22,9 +24,9 @@ Scene lifted_plane(int resolution) {
   return s;
 }
 
-// Δᵏ = (M⁻¹W)ᵏ built here from core's operator, independently of fairing_matrix().
+// Δᵏ = (M⁻¹W)ᵏ built here from core's operator, independently of polyharmonic_matrix().
 SparseMatrix laplacian_power(const Positions& P, const Faces& F, int k) {
-  const CotanLaplacian lap = cotan_laplacian(P, F);
+  const LaplaceOperator lap = cotan_laplacian(P, F);
   const SparseMatrix L = lap.mass.cwiseInverse().asDiagonal() * lap.W;
   SparseMatrix Lk = L;
   for (int i = 1; i < k; ++i) Lk = SparseMatrix(L * Lk);
@@ -45,7 +47,7 @@ TEST_CASE("fairing solves Δᵏb = 0 on free vertices and keeps constrained ones
   FairingOptions options;
   options.order = static_cast<FairingOrder>(k);
   options.fix_mesh_boundary = fix_mesh_boundary;
-  const RegionFairing fairing(mesh, s.region, options);
+  const RegionFairing fairing(s.P, s.F, s.region, options);
   const Positions b = fairing.base();
   REQUIRE(b.rows() == s.P.rows());
   REQUIRE(b.allFinite());
@@ -72,7 +74,7 @@ TEST_CASE("fairing with uniform weights solves the umbrella equation", "[decompo
   FairingOptions options;
   options.order = FairingOrder::ThinPlate;
   options.weights = LaplacianWeights::Uniform;
-  const RegionFairing fairing(mesh, s.region, options);
+  const RegionFairing fairing(s.P, s.F, s.region, options);
   const Positions b = fairing.base();
   const SparseMatrix W = uniform_laplacian(s.F, static_cast<int>(s.P.rows()));
   const Eigen::VectorXd degree = -W.diagonal();
@@ -110,18 +112,18 @@ TEST_CASE("fairing the bumpy plane's free region removes the bumps there", "[dec
   // holds similar tails (bumps reach down to y = 0.005).
   FairingOptions options;
   options.order = FairingOrder::Membrane;
-  Positions b = fair_region(mesh, s.region, options);
+  Positions b = fair_region(s.P, s.F, s.region, options);
   CHECK(max_height(b) == 0.0);  // the flat first ring determines the membrane: exactly flat
   CHECK(in_plane_drift(b) <= h);
   options.order = FairingOrder::ThinPlate;
-  b = fair_region(mesh, s.region, options);
+  b = fair_region(s.P, s.F, s.region, options);
   INFO("thin plate: max |z| " << max_height(b) << ", drift " << in_plane_drift(b));
   CHECK(max_height(b) <= 0.1 * s.bump_height);  // measured 0.0035: the slope of the second ring's tails
   CHECK(in_plane_drift(b) <= 1.5 * h);
   // Minimum variation continues the curvature of the tails in rings 2 and 3 (C² at the border) across
   // the whole free strip: heights beyond the bumps' (measured 0.14). It shrinks with the spacing.
   options.order = FairingOrder::MinimumVariation;
-  b = fair_region(mesh, s.region, options);
+  b = fair_region(s.P, s.F, s.region, options);
   CHECK(max_height(b) > s.bump_height);
   // With the tails removed from every constrained vertex all three orders give the exact plane.
   Positions tailless = s.P;
@@ -130,20 +132,20 @@ TEST_CASE("fairing the bumpy plane's free region removes the bumps there", "[dec
   const Mesh tailless_mesh = make_mesh(tailless, s.F);
   for (int k = 1; k <= 3; ++k) {
     options.order = static_cast<FairingOrder>(k);
-    CHECK(max_height(fair_region(tailless_mesh, s.region, options)) <= 1e-12);
+    CHECK(max_height(fair_region(tailless, s.F, s.region, options)) <= 1e-12);
   }
   // Uniform weights do not see the bumps' metric: the regular grid is reproduced in the plane.
   options.weights = LaplacianWeights::Uniform;
   for (int k = 1; k <= 3; ++k) {
     options.order = static_cast<FairingOrder>(k);
-    CHECK(in_plane_drift(fair_region(mesh, s.region, options)) <= 1e-8);
+    CHECK(in_plane_drift(fair_region(s.P, s.F, s.region, options)) <= 1e-8);
   }
   // Δb = 0 literally on the outline too (fix_mesh_boundary off): the membrane minimises area and pulls
   // the outline in by several spacings.
   options = FairingOptions{};
   options.order = FairingOrder::Membrane;
   options.fix_mesh_boundary = false;
-  CHECK(in_plane_drift(fair_region(mesh, s.region, options)) > 10 * h);
+  CHECK(in_plane_drift(fair_region(s.P, s.F, s.region, options)) > 10 * h);
 }
 
 TEST_CASE("fairing reproduces a planar region: linear precision of the cotan operator",
@@ -162,7 +164,6 @@ TEST_CASE("fairing reproduces a planar region: linear precision of the cotan ope
     for (int i = 0; i <= n; ++i)
       codes[j * (n + 1) + i] = std::min({i, j, n - i, n - j}) < 3 ? Region::kFixed : Region::kFree;
   const Region region = Region::from_codes(codes);
-  const Mesh mesh = make_mesh(P, F);
   // New constrained positions from an affine map (shear, scale, translation, out of plane too).
   Mat4 A = Mat4::Identity();
   A.topLeftCorner<3, 3>() << 1.2, 0.3, -0.1, 0.2, 0.9, 0.4, -0.3, 0.1, 1.1;
@@ -174,7 +175,7 @@ TEST_CASE("fairing reproduces a planar region: linear precision of the cotan ope
     INFO("order " << k);
     FairingOptions options;
     options.order = static_cast<FairingOrder>(k);
-    RegionFairing fairing(mesh, region, options);
+    RegionFairing fairing(P, F, region, options);
     CHECK((fairing.base() - P).cwiseAbs().maxCoeff() <= 1e-12);
     // Re-fairing affinely moved constraints with the stored factorisation gives the affine image.
     Positions out;
@@ -197,22 +198,21 @@ TEST_CASE("RegionFairing re-fairs new constraint positions without refactoring",
   const Scene flat = make_surface(SceneShape::Plane, o);
   // Prepared on the flat bumpy plane, re-faired with the lifted handle: the constraints are met exactly,
   // the result is linear in them, and fair() of the rest positions is fair_region().
-  const Mesh mesh = make_mesh(flat.P, flat.F);
-  RegionFairing fairing(mesh, flat.region);
+  RegionFairing fairing(flat.P, flat.F, flat.region);
   CHECK(fairing.prepared());
   CHECK(fairing.num_vertices() == flat.P.rows());
   // The free vertices within two rings of the outline are kept (fix_mesh_boundary, thin plate) and count
   // as constrained.
-  const std::vector<int> outline = mesh_boundary_band(mesh, 2);
-  CHECK(mesh_boundary_band(mesh, 1) == boundary_vertices(flat.F, static_cast<int>(flat.P.rows())));
-  CHECK(mesh_boundary_band(mesh, 0).empty());
+  const std::vector<int> outline = boundary_band(flat.F, static_cast<int>(flat.P.rows()), 2);
+  CHECK(boundary_band(flat.F, static_cast<int>(flat.P.rows()), 1) == boundary_vertices(flat.F, static_cast<int>(flat.P.rows())));
+  CHECK(boundary_band(flat.F, static_cast<int>(flat.P.rows()), 0).empty());
   std::vector<int> expected_free;
   for (int v : flat.region.free_vertices())
     if (!std::binary_search(outline.begin(), outline.end(), v)) expected_free.push_back(v);
   CHECK(fairing.free_vertices() == expected_free);
   CHECK(fairing.constrained_vertices().size() == flat.P.rows() - expected_free.size());
   const Positions b0 = fairing.base();
-  CHECK((b0 - fair_region(mesh, flat.region)).cwiseAbs().maxCoeff() <= 1e-14);
+  CHECK((b0 - fair_region(flat.P, flat.F, flat.region)).cwiseAbs().maxCoeff() <= 1e-14);
   Positions b1;
   fairing.fair(lifted.P, b1);
   for (int v : fairing.constrained_vertices()) REQUIRE(b1.row(v) == lifted.P.row(v));
@@ -231,25 +231,25 @@ TEST_CASE("fairing reports bad input", "[decomposition][fairing][bad-input]") {
   const Mesh mesh = make_mesh(s.P, s.F);
   const int nv = static_cast<int>(s.P.rows());
 
-  CHECK_THROWS_AS(fair_region(mesh, Region(nv, Region::kFree)), InvalidInput);
-  CHECK_THROWS_WITH(fair_region(mesh, Region(nv, Region::kFree)), Contains("no fixed or handle vertex"));
-  CHECK_THROWS_AS(fair_region(mesh, Region(nv - 1, Region::kFixed)), InvalidInput);
-  CHECK_THROWS_WITH(fair_region(mesh, Region(nv - 1, Region::kFixed)),
+  CHECK_THROWS_AS(fair_region(s.P, s.F, Region(nv, Region::kFree)), InvalidInput);
+  CHECK_THROWS_WITH(fair_region(s.P, s.F, Region(nv, Region::kFree)), Contains("no fixed or handle vertex"));
+  CHECK_THROWS_AS(fair_region(s.P, s.F, Region(nv - 1, Region::kFixed)), InvalidInput);
+  CHECK_THROWS_WITH(fair_region(s.P, s.F, Region(nv - 1, Region::kFixed)),
                     Contains("fair_region") && Contains("vertex labels"));
   // Handle codes must be consecutive: handle 1 used while handle 0 is empty.
   Region gap = s.region;
   gap.set_handle(s.region.handle_vertices(0), 1);
-  CHECK_THROWS_WITH(fair_region(mesh, gap), Contains("fair_region") && Contains("handle 0"));
+  CHECK_THROWS_WITH(fair_region(s.P, s.F, gap), Contains("fair_region") && Contains("handle 0"));
 
   FairingOptions bad;
   bad.order = static_cast<FairingOrder>(4);
-  CHECK_THROWS_WITH(fair_region(mesh, s.region, bad), Contains("order 4"));
+  CHECK_THROWS_WITH(fair_region(s.P, s.F, s.region, bad), Contains("order 4"));
 
   RegionFairing fairing;
   CHECK_FALSE(fairing.prepared());
   Positions out;
   CHECK_THROWS_AS(fairing.fair(s.P, out), UsageError);
-  fairing.prepare(mesh, s.region);
+  fairing.prepare(s.P, s.F, s.region);
   CHECK_THROWS_AS(fairing.fair(Positions(nv + 1, 3), out), UsageError);
   CHECK_THROWS_AS(fairing.fair_constrained(Positions(3, 3), out), UsageError);
   Positions nan = s.P;
@@ -271,11 +271,10 @@ TEST_CASE("fairing names the free vertex without area and the unanchored free co
   P << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 5, 5, 0, 6, 5, 0, 5, 6, 0;
   Faces F(3, 3);
   F << 0, 1, 2, 0, 2, 3, 4, 5, 6;
-  const Mesh mesh = make_mesh(P, F);
   Region region(7, Region::kFree);
   region.set_fixed({0, 1, 2});
-  CHECK_THROWS_AS(fair_region(mesh, region), TopologyError);
-  CHECK_THROWS_WITH(fair_region(mesh, region),
+  CHECK_THROWS_AS(fair_region(P, F, region), TopologyError);
+  CHECK_THROWS_WITH(fair_region(P, F, region),
                     Contains("fair_region") && Contains("touches no fixed or handle vertex"));
 
   // A free vertex whose only face is degenerate (collinear): Δ is undefined there.
@@ -284,11 +283,10 @@ TEST_CASE("fairing names the free vertex without area and the unanchored free co
   Faces G(3, 3);
   G << 0, 1, 2, 0, 2, 3, 1, 4, 2;
   Q.row(4) << 1, 0.5, 0;  // on the edge 1-2: face (1, 4, 2) has zero area
-  const Mesh degenerate = make_mesh(Q, G);
   Region r2(5, Region::kFixed);
   r2.set_free({4});
   FairingOptions literal;
   literal.fix_mesh_boundary = false;  // vertex 4 is on the outline
-  CHECK_THROWS_WITH(fair_region(degenerate, r2, literal),
+  CHECK_THROWS_WITH(fair_region(Q, G, r2, literal),
                     Contains("free vertex 4") && Contains("non-zero area"));
 }

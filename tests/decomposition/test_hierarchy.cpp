@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include "core/adjacency.h"
+#include "core/checks.h"
 #include "core/errors.h"
 #include "core/laplacian.h"
 #include "core/scenes.h"
@@ -26,9 +28,8 @@ TEST_CASE("smoothing hierarchy: levels get progressively smoother and rebuild S"
   SceneOptions o;
   o.resolution = 3000;
   const Scene s = make_surface(SceneShape::Plane, o);
-  const Mesh mesh = make_mesh(s.P, s.F);
   HierarchyOptions options;  // smoothing, 3 steps
-  const DecompositionHierarchy h = build_hierarchy(mesh, s.region, options);
+  const DecompositionHierarchy h = build_hierarchy(s.P, s.F, s.region, options);
   REQUIRE(h.num_levels() == 4);
   CHECK(h.level(0) == s.P);
   CHECK(&h.surface() == &h.level(0));
@@ -72,12 +73,11 @@ TEST_CASE("fairing hierarchy: growing order, each level the smoothest in its own
   Scene s = make_scene("lift", o);
   for (int v : s.region.handle_vertices(0))
     s.P.row(v) = transform_point(s.transforms[0], s.P.row(v).transpose()).transpose();
-  const Mesh mesh = make_mesh(s.P, s.F);
   HierarchyOptions options;
   options.method = HierarchyMethod::Fairing;
-  const DecompositionHierarchy h = build_hierarchy(mesh, s.region, options);
+  const DecompositionHierarchy h = build_hierarchy(s.P, s.F, s.region, options);
   REQUIRE(h.num_levels() == 4);
-  CHECK((h.base() - fair_region(mesh, s.region,
+  CHECK((h.base() - fair_region(s.P, s.F, s.region,
                                 [] {
                                   FairingOptions f;
                                   f.order = FairingOrder::MinimumVariation;
@@ -89,16 +89,16 @@ TEST_CASE("fairing hierarchy: growing order, each level the smoothest in its own
   // All levels keep the same vertices: the region's constrained ones and the 3-ring band at the outline.
   Region shared = s.region;
   std::vector<int> band;
-  for (int v : mesh_boundary_band(mesh, 3))
+  for (int v : boundary_band(s.F, static_cast<int>(s.P.rows()), 3))
     if (s.region.is_free(v)) band.push_back(v);
   shared.set_fixed(band);
   for (int i = 1; i < h.num_levels(); ++i) {
     FairingOptions fo;
     fo.order = options.orders[i - 1];
     fo.fix_mesh_boundary = false;
-    CHECK((h.level(i) - fair_region(mesh, shared, fo)).cwiseAbs().maxCoeff() == 0.0);
+    CHECK((h.level(i) - fair_region(s.P, s.F, shared, fo)).cwiseAbs().maxCoeff() == 0.0);
     for (int v : shared.constrained_vertices()) REQUIRE(h.level(i).row(v) == s.P.row(v));
-    const SparseMatrix Q = fairing_matrix(op, fo.order);
+    const SparseMatrix Q = polyharmonic_matrix(op, static_cast<int>(fo.order));
     for (int j = 0; j < i; ++j) {
       INFO("level " << i << " vs level " << j);
       CHECK(energy(Q, h.level(i)) <= energy(Q, h.level(j)) * (1 + 1e-9));
@@ -106,12 +106,12 @@ TEST_CASE("fairing hierarchy: growing order, each level the smoothest in its own
   }
   // A repeated order adds an identical level; a decreasing one is refused.
   options.orders = {FairingOrder::ThinPlate, FairingOrder::ThinPlate};
-  const DecompositionHierarchy same = build_hierarchy(mesh, s.region, options);
+  const DecompositionHierarchy same = build_hierarchy(s.P, s.F, s.region, options);
   CHECK(same.level(1) == same.level(2));
   options.orders = {FairingOrder::ThinPlate, FairingOrder::Membrane};
-  CHECK_THROWS_WITH(build_hierarchy(mesh, s.region, options), Contains("must not decrease"));
+  CHECK_THROWS_WITH(build_hierarchy(s.P, s.F, s.region, options), Contains("must not decrease"));
   options.orders.clear();
-  CHECK_THROWS_AS(build_hierarchy(mesh, s.region, options), InvalidInput);
+  CHECK_THROWS_AS(build_hierarchy(s.P, s.F, s.region, options), InvalidInput);
 }
 
 TEST_CASE("hierarchy reports bad input", "[decomposition][hierarchy][bad-input]") {
@@ -137,5 +137,5 @@ TEST_CASE("hierarchy reports bad input", "[decomposition][hierarchy][bad-input]"
   // Fairing with a region of the wrong size.
   options = HierarchyOptions{};
   options.method = HierarchyMethod::Fairing;
-  CHECK_THROWS_WITH(build_hierarchy(make_mesh(s.P, s.F), Region(3), options), Contains("vertex labels"));
+  CHECK_THROWS_WITH(build_hierarchy(s.P, s.F, Region(3), options), Contains("vertex labels"));
 }

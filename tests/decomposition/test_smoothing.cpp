@@ -2,6 +2,8 @@
 
 #include <random>
 
+#include "core/adjacency.h"
+#include "core/checks.h"
 #include "core/errors.h"
 #include "core/laplacian.h"
 #include "core/scenes.h"
@@ -16,7 +18,7 @@ namespace {
 // Thin-plate roughness Σ mᵢ |Δpᵢ|² over the interior vertices, with Δ = M⁻¹W of the reference surface
 // (boundary vertices carry the outline's curvature, which smoothing is not meant to remove).
 struct Roughness {
-  CotanLaplacian lap;
+  LaplaceOperator lap;
   std::vector<char> interior;
   Roughness(const Positions& P, const Faces& F) : lap(cotan_laplacian(P, F)), interior(P.rows(), 1) {
     for (int v : boundary_vertices(F, static_cast<int>(P.rows()))) interior[v] = 0;
@@ -101,7 +103,7 @@ TEST_CASE("implicit smoothing time units and rescaling", "[decomposition][smooth
   Positions P;
   Faces F;
   noisy_sphere(P, F);
-  const CotanLaplacian lap = cotan_laplacian(P, F);
+  const LaplaceOperator lap = cotan_laplacian(P, F);
   SmoothingOptions options;
   options.time_step = 0.01;
   options.unit = SmoothingTimeUnit::BoundingBoxDiagonalSquared;

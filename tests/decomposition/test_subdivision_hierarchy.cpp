@@ -113,7 +113,7 @@ TEST_CASE("subdivision hierarchy: coarse region from the fine one", "[decomposit
                                                          : Region::kFree));
   }
   CHECK(coarse_region(s.region, s.refinement).codes() == coarse.codes());
-  CHECK_NOTHROW(coarse.validate(make_mesh(s.coarse_P, s.coarse_F)));
+  CHECK_NOTHROW(coarse.validate(static_cast<int>(s.coarse_P.rows()), &s.coarse_F));
 }
 
 TEST_CASE("subdivision hierarchy reports bad input", "[decomposition][subdivision][bad-input]") {

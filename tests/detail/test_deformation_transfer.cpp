@@ -139,7 +139,7 @@ TEST_CASE("transfer: needle and degenerate triangles follow cotan_laplacian's ru
   DeformationTransfer dt;
   dt.set_anchor_vertices(n.anchors());
   dt.encode(n.P, n.F, n.P, n.F);
-  const CotanLaplacian L = cotan_laplacian(n.P, n.F);
+  const LaplaceOperator L = cotan_laplacian(n.P, n.F);
   const auto& r = dt.report();
   CHECK(L.clamped_cotangents == 3);  // the needle (1, 6, 8): all three angles beyond the clamp
   CHECK(r.degenerate_faces == L.degenerate_faces);
@@ -154,7 +154,7 @@ TEST_CASE("transfer: needle and degenerate triangles follow cotan_laplacian's ru
   exact.row(1) << 1, 0, 0;
   exact.row(6) << 3, 2, 0;
   exact.row(8) << 2, 1, 0;
-  const CotanLaplacian Le = cotan_laplacian(exact, n.F);
+  const LaplaceOperator Le = cotan_laplacian(exact, n.F);
   REQUIRE(Le.degenerate_faces == 1);
   DeformationTransfer de;
   de.encode(exact, n.F, exact, n.F);

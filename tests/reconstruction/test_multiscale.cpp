@@ -126,7 +126,7 @@ TEST_CASE("multiscale: Fig. 9.8, displacement vectors in global coordinates do n
 TEST_CASE("multiscale: handles are met and bad options are reported", "[reconstruction][multiscale]") {
   const Scene s = scene("twist135");
   MultiscaleDeformer ms;
-  ms.prepare(make_mesh(s.P, s.F), s.region);
+  ms.prepare(s.P, s.F, s.region);
   const Positions out = ms.deform(s.transforms);
   double err = 0;
   for (int v : s.region.handle_vertices(0)) err = std::max(err, (Vec3(out.row(v)) - transform_point(s.transforms[0], s.P.row(v))).norm());
@@ -311,5 +311,5 @@ TEST_CASE("multiscale on a subdivision hierarchy: the edit runs on the coarse me
   CHECK(fixed_move <= 0.15 * lift.norm());
   Scene other = s;
   other.F.row(0).swap(other.F.row(1));
-  CHECK_THROWS_WITH(ms.prepare(make_mesh(other.P, other.F), s.region), Contains("not the Loop refinement"));
+  CHECK_THROWS_WITH(ms.prepare(other.P, other.F, s.region), Contains("not the Loop refinement"));
 }

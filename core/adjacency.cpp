@@ -1,0 +1,80 @@
+#include "core/adjacency.h"
+
+#include <algorithm>
+#include <cstdint>
+
+namespace msd {
+
+VertexAdjacency vertex_adjacency(const Faces& F, int num_vertices) {
+  // Count both directions of every face edge, fill, then sort and deduplicate each row in place.
+  VertexAdjacency a;
+  a.offsets.assign(num_vertices + 1, 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int u = F(f, k), v = F(f, (k + 1) % 3);
+      if (u != v) ++a.offsets[u + 1], ++a.offsets[v + 1];
+    }
+  for (int v = 0; v < num_vertices; ++v) a.offsets[v + 1] += a.offsets[v];
+  std::vector<int> all(a.offsets.back()), fill(a.offsets.begin(), a.offsets.end() - 1);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int u = F(f, k), v = F(f, (k + 1) % 3);
+      if (u != v) all[fill[u]++] = v, all[fill[v]++] = u;
+    }
+  a.indices.reserve(all.size() / 2 + 1);
+  int begin = 0;
+  for (int v = 0; v < num_vertices; ++v) {
+    const int end = a.offsets[v + 1];
+    std::sort(all.begin() + begin, all.begin() + end);
+    const auto last = std::unique(all.begin() + begin, all.begin() + end);
+    a.indices.insert(a.indices.end(), all.begin() + begin, last);
+    a.offsets[v + 1] = static_cast<int>(a.indices.size());
+    begin = end;
+  }
+  return a;
+}
+
+std::vector<int> boundary_vertices(const Faces& F, int num_vertices) {
+  // Undirected edges as sorted 64-bit keys; a key that occurs once is a boundary edge.
+  std::vector<std::uint64_t> edges;
+  edges.reserve(3 * F.rows());
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const auto a = static_cast<std::uint64_t>(F(f, k)), b = static_cast<std::uint64_t>(F(f, (k + 1) % 3));
+      edges.push_back(std::min(a, b) << 32 | std::max(a, b));
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<char> on_boundary(num_vertices, 0);
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i + 1;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i == 1) on_boundary[edges[i] >> 32] = on_boundary[edges[i] & 0xffffffffu] = 1;
+    i = j;
+  }
+  std::vector<int> out;
+  for (int v = 0; v < num_vertices; ++v)
+    if (on_boundary[v]) out.push_back(v);
+  return out;
+}
+
+std::vector<int> boundary_band(const Faces& F, int num_vertices, int rings) {
+  if (rings <= 0) return {};
+  std::vector<int> ring = boundary_vertices(F, num_vertices);
+  if (ring.empty()) return {};
+  std::vector<char> in_band(num_vertices, 0);
+  for (int v : ring) in_band[v] = 1;
+  const VertexAdjacency adjacency = vertex_adjacency(F, num_vertices);
+  for (int r = 1; r < rings; ++r) {
+    std::vector<int> next;
+    for (int v : ring)
+      for (const int* w = adjacency.begin(v); w != adjacency.end(v); ++w)
+        if (!in_band[*w]) in_band[*w] = 1, next.push_back(*w);
+    ring.swap(next);
+  }
+  std::vector<int> band;
+  for (int v = 0; v < num_vertices; ++v)
+    if (in_band[v]) band.push_back(v);
+  return band;
+}
+
+}  // namespace msd

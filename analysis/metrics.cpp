@@ -1,7 +1,5 @@
 #include "analysis/metrics.h"
 
-#include <Eigen/SVD>
-
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -11,7 +9,7 @@
 #include "core/errors.h"
 #include "core/laplacian.h"
 #include "core/parallel.h"
-#include "core/laplacian.h"
+#include "core/rotation.h"
 #include "detail/normal_displacements.h"
 
 namespace msd {
@@ -31,32 +29,14 @@ void require_finite(const Positions& P, const char* who, const char* name) {
                          std::to_string(i));
 }
 
-// Sorted, unique one-ring neighbours of every vertex in compressed rows.
-struct Neighbours {
-  std::vector<int> offsets, indices;
-};
-
-Neighbours one_rings(const Faces& F, int num_vertices) {
-  std::vector<std::pair<int, int>> edges;
-  edges.reserve(F.rows() * 6);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int a = F(f, k), b = F(f, (k + 1) % 3);
-      if (a == b) continue;
-      edges.emplace_back(a, b);
-      edges.emplace_back(b, a);
-    }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  Neighbours n;
-  n.offsets.assign(num_vertices + 1, 0);
-  n.indices.reserve(edges.size());
-  for (const auto& [a, b] : edges) {
-    ++n.offsets[a + 1];
-    n.indices.push_back(b);
+// Σ_f p0 · (p1 × p2) / 6 over all faces (the caller checks indices and closedness).
+double signed_volume(const Positions& P, const Faces& F) {
+  double six_volume = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Vec3 a = P.row(F(f, 0)), b = P.row(F(f, 1)), c = P.row(F(f, 2));
+    six_volume += a.dot(b.cross(c));
   }
-  for (int v = 0; v < num_vertices; ++v) n.offsets[v + 1] += n.offsets[v];
-  return n;
+  return six_volume / 6.0;
 }
 
 // Local ARAP step for one vertex: the residual of the best rotation and the normaliser Σ w |e|².
@@ -73,15 +53,7 @@ double one_ring_residual(const Positions& rest, const Positions& deformed, int i
     normaliser += w * e.squaredNorm();
   });
   if (!(normaliser > 0)) return 0;
-  // R = V Uᵀ maximises tr(R S) for S = U Σ Vᵀ; flipping the column of the smallest singular value keeps
-  // R a rotation when V Uᵀ would be a reflection.
-  const Eigen::JacobiSVD<Mat3> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Mat3 U = svd.matrixU();
-  Mat3 R = svd.matrixV() * U.transpose();
-  if (R.determinant() < 0) {
-    U.col(2) = -U.col(2);
-    R = svd.matrixV() * U.transpose();
-  }
+  const Mat3 R = best_rotation(covariance);  // Kabsch; a rotation, never a reflection
   double residual = 0;
   for_each([&](int j, double w) {
     const Vec3 e = p - rest.row(j).transpose(), e1 = q - deformed.row(j).transpose();
@@ -148,16 +120,22 @@ double handle_error(const Positions& rest, const Positions& deformed, const Regi
   return error;
 }
 
-RigidityError rigidity_error(const Positions& rest, const Positions& deformed, const Faces& F,
-                             const RigidityOptions& options) {
-  const char* who = "rigidity_error";
-  require_same_rows(rest, deformed, who, "rest", "deformed");
-  check_mesh_arrays(rest, F, who);
-  require_finite(deformed, who, "deformed");
+RigidityMetric::RigidityMetric(const Positions& rest, const Faces& F, const RigidityOptions& options)
+    : rest_(rest), options_(options) {
+  check_mesh_arrays(rest, F, "rigidity_error");
   const int nv = static_cast<int>(rest.rows());
-  const Neighbours ring = one_rings(F, nv);
-  SparseMatrix W;
-  if (options.weights == RigidityWeights::Cotan) W = cotan_laplacian(rest, F).W;
+  rings_ = vertex_adjacency(F, nv);
+  if (options.weights == RigidityWeights::Cotan) weights_ = cotan_laplacian(rest, F).W;
+  for (int v = 0; v < nv; ++v)
+    if (rings_.degree(v) > 0) connected_.push_back(v);
+}
+
+RigidityError RigidityMetric::measure(const Positions& deformed) const {
+  const char* who = "rigidity_error";
+  require_same_rows(rest_, deformed, who, "rest", "deformed");
+  require_finite(deformed, who, "deformed");
+  const int nv = static_cast<int>(rest_.rows());
+  const bool cotan_weights = options_.weights == RigidityWeights::Cotan;
 
   RigidityError out;
   out.per_vertex = Eigen::VectorXd::Zero(nv);
@@ -167,61 +145,78 @@ RigidityError rigidity_error(const Positions& rest, const Positions& deformed, c
         for (long v = begin; v < end; ++v) {
           const int i = static_cast<int>(v);
           auto uniform = [&](auto&& visit) {
-            for (int k = ring.offsets[i]; k < ring.offsets[i + 1]; ++k) visit(ring.indices[k], 1.0);
+            for (const int* j = rings_.begin(i); j != rings_.end(i); ++j) visit(*j, 1.0);
           };
           double normaliser = 0, residual = 0;
-          if (options.weights == RigidityWeights::Cotan) {
+          if (cotan_weights) {
             // W is symmetric, so column i lists the weights W_ji = W_ij of i's edges.
             auto cotan = [&](auto&& visit) {
-              for (SparseMatrix::InnerIterator it(W, i); it; ++it)
+              for (SparseMatrix::InnerIterator it(weights_, i); it; ++it)
                 if (it.row() != i && it.value() > 0) visit(static_cast<int>(it.row()), it.value());
             };
-            residual = one_ring_residual(rest, deformed, i, cotan, normaliser);
+            residual = one_ring_residual(rest_, deformed, i, cotan, normaliser);
           }
-          if (!(normaliser > 0)) residual = one_ring_residual(rest, deformed, i, uniform, normaliser);
+          if (!(normaliser > 0)) residual = one_ring_residual(rest_, deformed, i, uniform, normaliser);
           out.per_vertex[i] = normaliser > 0 ? residual / normaliser : 0.0;
         }
       },
       1024);
-  std::vector<int> connected;
-  for (int v = 0; v < nv; ++v)
-    if (ring.offsets[v + 1] > ring.offsets[v]) connected.push_back(v);
-  out.stats = summarize(out.per_vertex, connected);
+  out.stats = summarize(out.per_vertex, connected_);
+  return out;
+}
+
+RigidityError rigidity_error(const Positions& rest, const Positions& deformed, const Faces& F,
+                             const RigidityOptions& options) {
+  require_same_rows(rest, deformed, "rigidity_error", "rest", "deformed");
+  return RigidityMetric(rest, F, options).measure(deformed);
+}
+
+DetailDistortionMetric::DetailDistortionMetric(const Positions& rest, const Faces& F, const Region& region,
+                                               const FairingOptions& fairing)
+    : F_(F), region_(region), fairing_(fairing) {
+  const char* who = "detail_distortion";
+  if (region.num_vertices() != rest.rows())
+    throw InvalidInput(std::string(who) + ": region has " + std::to_string(region.num_vertices()) +
+                       " vertices but the mesh has " + std::to_string(rest.rows()));
+  free_ = region.free_vertices();
+  if (free_.empty())
+    throw InvalidInput(std::string(who) + ": the region has no free vertex to measure details on");
+
+  const Positions B0 = fair_region(rest, F, region, fairing);
+  NormalDisplacements before;
+  before.encode(rest, F, B0, F);
+  rest_heights_ = before.heights();
+  rest_fallback_ = before.report().fallback;
+  double max_height = 0;
+  for (int v : free_) max_height = std::max(max_height, std::abs(rest_heights_[v]));
+  const double diagonal = bounding_box_diagonal(rest);
+  scale_ = max_height > 1e-12 * diagonal ? max_height : diagonal;
+  if (!(scale_ > 0)) throw InvalidInput(std::string(who) + ": the rest mesh has zero extent");
+}
+
+DetailDistortion DetailDistortionMetric::measure(const Positions& deformed) const {
+  if (deformed.rows() != rest_heights_.size())
+    throw InvalidInput("detail_distortion: rest has " + std::to_string(rest_heights_.size()) +
+                       " vertices but deformed has " + std::to_string(deformed.rows()));
+  const Positions B1 = fair_region(deformed, F_, region_, fairing_);
+  NormalDisplacements after;
+  after.encode(deformed, F_, B1, F_);
+
+  DetailDistortion out;
+  out.rest_heights = rest_heights_;
+  out.deformed_heights = after.heights();
+  out.fallback_vertices = rest_fallback_ + after.report().fallback;
+  out.per_vertex = Eigen::VectorXd::Zero(deformed.rows());
+  for (int v : free_) out.per_vertex[v] = std::abs(out.deformed_heights[v] - out.rest_heights[v]);
+  out.scale = scale_;
+  out.stats = summarize(out.per_vertex / out.scale, free_);
   return out;
 }
 
 DetailDistortion detail_distortion(const Positions& rest, const Positions& deformed, const Faces& F,
                                    const Region& region, const FairingOptions& fairing) {
-  const char* who = "detail_distortion";
-  require_same_rows(rest, deformed, who, "rest", "deformed");
-  if (region.num_vertices() != rest.rows())
-    throw InvalidInput(std::string(who) + ": region has " + std::to_string(region.num_vertices()) +
-                       " vertices but the mesh has " + std::to_string(rest.rows()));
-  const std::vector<int> free = region.free_vertices();
-  if (free.empty())
-    throw InvalidInput(std::string(who) + ": the region has no free vertex to measure details on");
-
-  const Positions B0 = fair_region(rest, F, region, fairing);
-  const Positions B1 = fair_region(deformed, F, region, fairing);
-  NormalDisplacements before, after;
-  before.encode(rest, F, B0, F);
-  after.encode(deformed, F, B1, F);
-
-  DetailDistortion out;
-  out.rest_heights = before.heights();
-  out.deformed_heights = after.heights();
-  out.fallback_vertices = before.report().fallback + after.report().fallback;
-  out.per_vertex = Eigen::VectorXd::Zero(rest.rows());
-  double max_height = 0;
-  for (int v : free) {
-    out.per_vertex[v] = std::abs(out.deformed_heights[v] - out.rest_heights[v]);
-    max_height = std::max(max_height, std::abs(out.rest_heights[v]));
-  }
-  const double diagonal = bounding_box_diagonal(rest);
-  out.scale = max_height > 1e-12 * diagonal ? max_height : diagonal;
-  if (!(out.scale > 0)) throw InvalidInput(std::string(who) + ": the rest mesh has zero extent");
-  out.stats = summarize(out.per_vertex / out.scale, free);
-  return out;
+  require_same_rows(rest, deformed, "detail_distortion", "rest", "deformed");
+  return DetailDistortionMetric(rest, F, region, fairing).measure(deformed);
 }
 
 bool is_closed(const Faces& F, int num_vertices) {
@@ -246,20 +241,44 @@ bool is_closed(const Faces& F, int num_vertices) {
 std::optional<double> volume(const Positions& P, const Faces& F) {
   check_mesh_arrays(P, F, "volume");
   if (!is_closed(F, static_cast<int>(P.rows()))) return std::nullopt;
-  double six_volume = 0;
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Vec3 a = P.row(F(f, 0)), b = P.row(F(f, 1)), c = P.row(F(f, 2));
-    six_volume += a.dot(b.cross(c));
-  }
-  return six_volume / 6.0;
+  return signed_volume(P, F);
+}
+
+VolumeChangeMetric::VolumeChangeMetric(const Positions& rest, const Faces& F)
+    : F_(F), num_vertices_(rest.rows()), rest_volume_(volume(rest, F)) {}
+
+std::optional<double> VolumeChangeMetric::measure(const Positions& deformed) const {
+  if (deformed.rows() != num_vertices_)
+    throw InvalidInput("volume_change: rest has " + std::to_string(num_vertices_) + " vertices but deformed has " +
+                       std::to_string(deformed.rows()));
+  if (!rest_volume_ || *rest_volume_ == 0) return std::nullopt;
+  check_mesh_arrays(deformed, F_, "volume");  // closed like the rest shape: same faces
+  return signed_volume(deformed, F_) / *rest_volume_ - 1.0;
 }
 
 std::optional<double> volume_change(const Positions& rest, const Positions& deformed, const Faces& F) {
   require_same_rows(rest, deformed, "volume_change", "rest", "deformed");
-  const std::optional<double> v0 = volume(rest, F);
-  if (!v0 || *v0 == 0) return std::nullopt;
-  const std::optional<double> v1 = volume(deformed, F);
-  return *v1 / *v0 - 1.0;
+  return VolumeChangeMetric(rest, F).measure(deformed);
+}
+
+EditMetrics::EditMetrics(const Positions& rest, const Faces& F, const Region& region,
+                         const EditMetricsOptions& options)
+    : region_(region),
+      rigidity_(rest, F, options.rigidity),
+      distortion_(rest, F, region, options.fairing),
+      volume_(rest, F) {}
+
+double EditMetrics::handle_error(const Positions& deformed, const std::vector<Mat4>& transforms) const {
+  return msd::handle_error(rest(), deformed, region_, transforms);
+}
+
+EditMeasurement EditMetrics::measure(const Positions& deformed, const std::vector<Mat4>& transforms) const {
+  EditMeasurement m;
+  m.handle_error = handle_error(deformed, transforms);
+  m.rigidity = rigidity(deformed);
+  m.distortion = detail_distortion(deformed);
+  m.volume_change = volume_change(deformed);
+  return m;
 }
 
 ReferenceDistance distance_to_reference(const Positions& P, const Faces& F, const Positions& Q,

@@ -2,11 +2,14 @@
 //! \file Metrics of a deformation result (design.md §6): handle error, rigidity error (ARAP residual of
 //! the one-rings), detail distortion (change of normal-displacement heights over faired bases), volume
 //! change of closed meshes, and distance to a reference result. All functions take bulk arrays (#V by 3
-//! positions, #F by 3 faces); none modifies its input.
+//! positions, #F by 3 faces); none modifies its input. Each metric with rest-shape data also comes
+//! prepared (RigidityMetric, DetailDistortionMetric, VolumeChangeMetric, and EditMetrics for all of an
+//! edit), for measuring several results of one edit.
 
 #include <optional>
 #include <vector>
 
+#include "core/adjacency.h"
 #include "core/region.h"
 #include "core/types.h"
 #include "decomposition/fairing.h"
@@ -62,8 +65,29 @@ struct RigidityError {
   Stats stats;  //!< over all vertices with at least one neighbour
 };
 
-//! Rigidity error of deformed against rest (both #V by 3) on faces F (#F by 3), in parallel.
-//! \throw InvalidInput for differing row counts, a face index out of range, or a non-finite coordinate.
+//! The rigidity error prepared from the rest shape: one-rings and (for Cotan) the rest cotan weights are
+//! built once, then measure() costs one 3x3 SVD per vertex, in parallel.
+class RigidityMetric {
+ public:
+  //! rest: #V by 3, F: #F by 3. \throw InvalidInput for a face index out of range or a non-finite
+  //! coordinate of rest.
+  RigidityMetric(const Positions& rest, const Faces& F, const RigidityOptions& options = {});
+  //! The error of deformed (#V by 3) against the rest shape. \throw InvalidInput for a row count other
+  //! than the rest shape's or a non-finite coordinate (naming the vertex).
+  RigidityError measure(const Positions& deformed) const;
+  const Positions& rest() const { return rest_; }
+
+ private:
+  Positions rest_;
+  RigidityOptions options_;
+  VertexAdjacency rings_;
+  SparseMatrix weights_;          // rest cotan weights W (empty for Uniform)
+  std::vector<int> connected_;    // vertices with at least one neighbour
+};
+
+//! Rigidity error of deformed against rest (both #V by 3) on faces F (#F by 3), in parallel: one-shot
+//! RigidityMetric. \throw InvalidInput for differing row counts, a face index out of range, or a
+//! non-finite coordinate.
 RigidityError rigidity_error(const Positions& rest, const Positions& deformed, const Faces& F,
                              const RigidityOptions& options = {});
 
@@ -90,9 +114,36 @@ struct DetailDistortion {
   int fallback_vertices = 0;
 };
 
+//! The detail distortion prepared from the rest shape S: its base B0 = fair_region(S), its heights h0
+//! over B0 and the normaliser are computed once. measure() fairs and encodes the deformed shape only (B1
+//! is faired with the operator of S', as DetailDistortion defines it).
+class DetailDistortionMetric {
+ public:
+  //! rest: #V by 3 with faces F (#F by 3); region as for the edit (its free vertices are faired).
+  //! \throw InvalidInput for a region of another size or without free vertices, or a rest mesh of zero
+  //! extent; otherwise as fair_region() and NormalDisplacements::encode().
+  DetailDistortionMetric(const Positions& rest, const Faces& F, const Region& region,
+                         const FairingOptions& fairing = {});
+  //! The distortion of deformed (S', #V by 3). \throw InvalidInput for another row count; otherwise as
+  //! fair_region() and NormalDisplacements::encode() on S'.
+  DetailDistortion measure(const Positions& deformed) const;
+  const Eigen::VectorXd& rest_heights() const { return rest_heights_; }  //!< #V h0
+  double scale() const { return scale_; }                                //!< DetailDistortion::scale
+
+ private:
+  Faces F_;
+  Region region_;
+  FairingOptions fairing_;
+  std::vector<int> free_;
+  Eigen::VectorXd rest_heights_;
+  int rest_fallback_ = 0;
+  double scale_ = 0;
+};
+
 //! Detail distortion of deformed (S') against rest (S), both #V by 3 with faces F; region as for the
-//! edit (its free vertices are faired). \throw InvalidInput for differing sizes or a region without free
-//! vertices; otherwise as fair_region() and NormalDisplacements::encode().
+//! edit (its free vertices are faired): one-shot DetailDistortionMetric. \throw InvalidInput for
+//! differing sizes or a region without free vertices; otherwise as fair_region() and
+//! NormalDisplacements::encode().
 DetailDistortion detail_distortion(const Positions& rest, const Positions& deformed, const Faces& F,
                                    const Region& region, const FairingOptions& fairing = {});
 
@@ -109,10 +160,70 @@ bool is_closed(const Faces& F, int num_vertices);
 //! \throw InvalidInput for a face index out of range or a non-finite coordinate.
 std::optional<double> volume(const Positions& P, const Faces& F);
 
+//! The volume change prepared from the rest shape: closedness and the rest volume are computed once.
+class VolumeChangeMetric {
+ public:
+  //! rest: #V by 3, F: #F by 3. \throw as volume().
+  VolumeChangeMetric(const Positions& rest, const Faces& F);
+  //! V(deformed)/V(rest) − 1 for deformed (#V by 3); std::nullopt when the mesh is not closed or the rest
+  //! volume is 0 (deformed is then not read). \throw InvalidInput for another row count and as volume().
+  std::optional<double> measure(const Positions& deformed) const;
+  const std::optional<double>& rest_volume() const { return rest_volume_; }  //!< std::nullopt if not closed
+
+ private:
+  Faces F_;
+  Eigen::Index num_vertices_ = 0;
+  std::optional<double> rest_volume_;
+};
+
 //! Relative volume change V(deformed)/V(rest) − 1 (a uniform scaling by s gives s³ − 1). std::nullopt
-//! when the mesh is not closed or the rest volume is 0. \throw InvalidInput for differing row counts and
-//! as volume().
+//! when the mesh is not closed or the rest volume is 0: one-shot VolumeChangeMetric. \throw InvalidInput
+//! for differing row counts and as volume().
 std::optional<double> volume_change(const Positions& rest, const Positions& deformed, const Faces& F);
+
+// ---------------------------------------------------------------------------------------------------
+// All metrics of one edit
+
+struct EditMetricsOptions {
+  RigidityOptions rigidity;
+  FairingOptions fairing;  //!< of the detail distortion's bases
+};
+
+//! The metrics of one result: handle error, rigidity, detail distortion and volume change.
+struct EditMeasurement {
+  double handle_error = 0;
+  RigidityError rigidity;
+  DetailDistortion distortion;
+  std::optional<double> volume_change;
+};
+
+//! The metrics of an edit prepared once from its rest shape, faces and region, then measured for each
+//! result of that edit (every method of a comparison): the rest-shape data of rigidity (one-rings, cotan
+//! weights), of detail distortion (B0, h0) and of volume change (closedness, rest volume) are computed
+//! once. Each measurement returns exactly what the one-shot functions return.
+class EditMetrics {
+ public:
+  //! rest: #V by 3, F: #F by 3, region: #V codes. \throw as RigidityMetric, DetailDistortionMetric and
+  //! VolumeChangeMetric.
+  EditMetrics(const Positions& rest, const Faces& F, const Region& region, const EditMetricsOptions& options = {});
+
+  //! As handle_error() against the rest shape and region.
+  double handle_error(const Positions& deformed, const std::vector<Mat4>& transforms) const;
+  RigidityError rigidity(const Positions& deformed) const { return rigidity_.measure(deformed); }
+  DetailDistortion detail_distortion(const Positions& deformed) const { return distortion_.measure(deformed); }
+  std::optional<double> volume_change(const Positions& deformed) const { return volume_.measure(deformed); }
+  //! All four, in that order (the first that throws ends the measurement).
+  EditMeasurement measure(const Positions& deformed, const std::vector<Mat4>& transforms) const;
+
+  const Positions& rest() const { return rigidity_.rest(); }
+  const Region& region() const { return region_; }
+
+ private:
+  Region region_;
+  RigidityMetric rigidity_;
+  DetailDistortionMetric distortion_;
+  VolumeChangeMetric volume_;
+};
 
 // ---------------------------------------------------------------------------------------------------
 // Distance to a reference result

@@ -235,3 +235,52 @@ TEST_CASE("detail distortion: zero for the input and for a rigid motion, 0.5 for
   CHECK_THROWS_AS(detail_distortion(s.P, s.P, s.F, Region(static_cast<int>(s.P.rows()), Region::kFixed)),
                   InvalidInput);
 }
+
+TEST_CASE("prepared metrics: one EditMetrics per edit gives exactly the one-shot values for every result",
+          "[analysis][metrics]") {
+  SceneOptions o;
+  o.resolution = 3000;
+  const Scene s = make_scene("bend120", o);
+  const EditMetrics metrics(s.P, s.F, s.region);
+  CHECK(metrics.rest().rows() == s.P.rows());
+  CHECK_FALSE(metrics.volume_change(s.P));  // an open plane has no volume
+  const Positions results[] = {
+      s.P,
+      test::rigid_motion(s.P, some_rotation(), Vec3(0.3, 0.2, -1)),
+      s.P + 0.01 * s.P.array().sin().matrix(),
+  };
+  for (const Positions& deformed : results) {
+    const EditMeasurement m = metrics.measure(deformed, s.transforms);
+    CHECK(m.handle_error == handle_error(s.P, deformed, s.region, s.transforms));
+    const RigidityError rigidity = rigidity_error(s.P, deformed, s.F);
+    CHECK(m.rigidity.per_vertex == rigidity.per_vertex);
+    CHECK(m.rigidity.stats.mean == rigidity.stats.mean);
+    CHECK(m.rigidity.stats.count == rigidity.stats.count);
+    const DetailDistortion d = detail_distortion(s.P, deformed, s.F, s.region);
+    CHECK(m.distortion.per_vertex == d.per_vertex);
+    CHECK(m.distortion.rest_heights == d.rest_heights);
+    CHECK(m.distortion.deformed_heights == d.deformed_heights);
+    CHECK(m.distortion.scale == d.scale);
+    CHECK(m.distortion.stats.p95 == d.stats.p95);
+    CHECK(m.distortion.fallback_vertices == d.fallback_vertices);
+  }
+  CHECK_THROWS_AS(metrics.rigidity(Positions(s.P.topRows(10))), InvalidInput);
+  CHECK_THROWS_AS(metrics.detail_distortion(Positions(s.P.topRows(10))), InvalidInput);
+  CHECK_THROWS_AS(EditMetrics(s.P, s.F, Region(static_cast<int>(s.P.rows()), Region::kFixed)), InvalidInput);
+}
+
+TEST_CASE("prepared volume change: rest volume once, same value as the one-shot function", "[analysis][metrics]") {
+  Positions P;
+  Faces F;
+  test::icosphere(3, P, F);
+  const VolumeChangeMetric metric(P, F);
+  REQUIRE(metric.rest_volume());
+  CHECK(*metric.rest_volume() == *volume(P, F));
+  const Positions scaled = 1.2 * P;
+  CHECK(*metric.measure(scaled) == *volume_change(P, scaled, F));
+  CHECK(*metric.measure(scaled) == Approx(1.2 * 1.2 * 1.2 - 1).epsilon(1e-12));
+  Positions bad = P;
+  bad(4, 1) = NAN;
+  CHECK_THROWS_WITH(metric.measure(bad), Contains("vertex 4"));
+  CHECK_THROWS_AS(metric.measure(Positions(P.topRows(5))), InvalidInput);
+}

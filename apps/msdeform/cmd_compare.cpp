@@ -4,12 +4,13 @@
 #include <memory>
 #include <sstream>
 
-#include "analysis/comparison.h"
+#include "apps/compare/runner.h"
 #include "analysis/render.h"
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/deformers.h"
 #include "apps/msdeform/edit_case.h"
 #include "core/atomic_file.h"
+#include "core/edit_case.h"
 #include "core/errors.h"
 #include "core/mesh_io.h"
 #include "core/scenes.h"
@@ -149,10 +150,10 @@ void add_compare_command(CLI::App& app) {
     std::vector<std::string> tile_labels;
     std::vector<std::vector<Image>> tiles_by_scene;
     for (const auto& c : cases) {
-      std::fprintf(stderr, "%s: %zu vertices, %zu methods\n", c.name.c_str(), c.mesh.n_vertices(), options.methods.size());
+      std::fprintf(stderr, "%s: %zu vertices, %zu methods\n", c.name.c_str(), size_t(c.P.rows()), options.methods.size());
       std::vector<MethodResult> results = compare_methods(c, options);
-      const Positions rest = positions(c.mesh);
-      const Faces F = faces(c.mesh);
+      const Positions& rest = c.P;
+      const Faces& F = c.F;
       RenderOptions view;
       view.width = 640;
       view.height = 480;

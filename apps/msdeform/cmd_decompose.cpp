@@ -43,8 +43,8 @@ void add_decompose_command(CLI::App& app) {
       throw InvalidInput("decompose: " + *output + ": the output carries per-vertex detail heights and must be .ply");
     const bool fairing = *base == BaseKind::Fairing;
     const EditCase c = edit->load(/*need_transforms=*/false, /*need_region=*/fairing);
-    const Positions S = positions(c.mesh);
-    const Faces F = faces(c.mesh);
+    const Positions& S = c.P;
+    const Faces& F = c.F;
     const auto t0 = std::chrono::steady_clock::now();
     Positions B;
     LowPassReport report;

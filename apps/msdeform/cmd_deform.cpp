@@ -41,16 +41,16 @@ void add_deform_command(CLI::App& app) {
   cmd->callback([=] {
     const EditCase c = edit->load();
     std::unique_ptr<Deformer> deformer = method->make();
-    const Positions rest = positions(c.mesh);
+    const Positions& rest = c.P;
     auto t0 = Clock::now();
-    deformer->prepare(c.mesh, c.region);
+    deformer->prepare(c.P, c.F, c.region);
     const double prepare_ms = ms_since(t0);
     Positions out(rest.rows(), 3);
     deformer->deform(c.transforms, out);  // first frame warms caches and buffers
     t0 = Clock::now();
     deformer->deform(c.transforms, out);
     const double frame_ms = ms_since(t0);
-    save_mesh(out, faces(c.mesh), *output);
+    save_mesh(out, c.F, *output);
     std::printf("%s on %s: %ld vertices (%zu free, %d handle(s))\n", deformer->name().c_str(), c.name.c_str(),
                 long(rest.rows()), c.region.free_vertices().size(), c.region.num_handles());
     std::printf("  prepare %.1f ms, frame %.2f ms, handle error %.3g\n", prepare_ms, frame_ms, handle_error(rest, out, c.region, c.transforms));

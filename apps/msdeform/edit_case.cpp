@@ -1,9 +1,6 @@
 #include "apps/msdeform/edit_case.h"
 
-#include <filesystem>
-
 #include "core/errors.h"
-#include "core/mesh_io.h"
 #include "core/scenes.h"
 
 namespace msd::cli {
@@ -21,23 +18,12 @@ void EditCaseOptions::add_to(CLI::App& cmd) {
 EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {
   if (!scene.empty()) return scene_case(scene, parse_resolution(resolution));
   if (mesh.empty()) throw InvalidInput("give a mesh file with --sel and --def, or a built-in --scene");
-  if (sel.empty()) {
-    if (need_region) throw InvalidInput("a mesh file needs --sel (the region)");
-    EditCase c;
-    c.name = std::filesystem::path(mesh).stem().string();
-    c.mesh = load_mesh(mesh);
-    return c;
-  }
-  if (need_transforms) {
+  if (sel.empty() && need_region) throw InvalidInput("a mesh file needs --sel (the region)");
+  if (!sel.empty() && need_transforms) {
     if (def.empty()) throw InvalidInput("a mesh file needs --def (the handle transforms)");
     return file_case(mesh, sel, def);
   }
-  EditCase c;
-  c.name = std::filesystem::path(mesh).stem().string();
-  c.mesh = load_mesh(mesh);
-  const int nv = static_cast<int>(c.mesh.n_vertices());
-  c.region = file_extension(sel) == ".dmat" ? read_dmat_groups(sel, nv) : read_sel(sel, nv);
-  return c;
+  return load_edit_case(mesh, sel);  // the mesh, and the region when --sel is given
 }
 
 }  // namespace msd::cli

@@ -1,11 +1,11 @@
 #pragma once
-// Command-line options that choose an edit: mesh files or a built-in scene.
+// Command-line options that choose an edit: mesh files or a built-in scene (loaded by core/edit_case.h).
 
 #include <string>
 
 #include <CLI/CLI.hpp>
 
-#include "analysis/comparison.h"
+#include "core/edit_case.h"
 
 namespace msd::cli {
 

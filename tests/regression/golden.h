@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/comparison.h"
+#include "apps/compare/runner.h"
 #include "core/atomic_file.h"
 
 namespace msd::test {

@@ -4,7 +4,7 @@
 // explain the change in the commit that updates the file.
 #include <catch2/catch.hpp>
 
-#include "analysis/comparison.h"
+#include "apps/compare/runner.h"
 #include "analysis/self_intersections.h"
 #include "core/scenes.h"
 #include "detail/deformation_transfer.h"

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "analysis/comparison.h"
+#include "apps/compare/runner.h"
 #include "core/mesh_io.h"
 #include "golden.h"
 #include "test_util.h"
@@ -24,10 +24,9 @@ const std::vector<std::string> kMethods = {"shell", "multiscale-vectors", "multi
 // 10 % of the extent; everything between is free. With two_handles, the middle 10 % is fixed instead and
 // both ends are handles (the far one turned the other way).
 EditCase whole_body_edit(const std::string& name, const std::string& file, bool two_handles) {
-  EditCase c;
+  EditCase c = load_edit_case(file);
   c.name = name;
-  c.mesh = load_mesh(file);
-  const Positions P = positions(c.mesh);
+  const Positions& P = c.P;
   const Vec3 lo = P.colwise().minCoeff(), hi = P.colwise().maxCoeff();
   int a = 0;
   (hi - lo).maxCoeff(&a);

@@ -1,14 +1,13 @@
-#include "analysis/comparison.h"
+#include "apps/compare/runner.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
+#include <exception>
+#include <optional>
 
 #include "analysis/self_intersections.h"
 #include "core/errors.h"
-#include "core/mesh_io.h"
-#include "core/scenes.h"
 #include "reconstruction/multiscale.h"
 
 namespace msd {
@@ -25,26 +24,6 @@ std::string format(const char* fmt, double x) {
 
 }  // namespace
 
-EditCase scene_case(const std::string& scene, int resolution) {
-  SceneOptions options;
-  options.resolution = resolution;
-  Scene s = make_scene(scene, options);
-  return {s.name, make_mesh(s.P, s.F), std::move(s.region), std::move(s.transforms)};
-}
-
-EditCase file_case(const std::string& mesh, const std::string& sel, const std::string& def) {
-  EditCase c;
-  c.name = std::filesystem::path(mesh).stem().string();
-  c.mesh = load_mesh(mesh);
-  const int nv = static_cast<int>(c.mesh.n_vertices());
-  c.region = file_extension(sel) == ".dmat" ? read_dmat_groups(sel, nv) : read_sel(sel, nv);
-  c.transforms = read_def(def);
-  if (static_cast<int>(c.transforms.size()) != c.region.num_handles())
-    throw InvalidInput(def + " has " + std::to_string(c.transforms.size()) + " matrices but " + sel + " defines " +
-                       std::to_string(c.region.num_handles()) + " handle(s)");
-  return c;
-}
-
 void check_method_names(const std::vector<std::string>& methods) {
   if (methods.empty()) throw InvalidInput("no method to compare");
   for (const auto& m : methods) make_deformer(m);  // throws for an unknown name, listing the known ones
@@ -52,8 +31,17 @@ void check_method_names(const std::vector<std::string>& methods) {
 
 std::vector<MethodResult> compare_methods(const EditCase& edit, const ComparisonOptions& options) {
   check_method_names(options.methods);
-  const Positions rest = positions(edit.mesh);
-  const Faces F = faces(edit.mesh);
+  const Positions& rest = edit.P;
+  const Faces& F = edit.F;
+  // The rest-shape side of the metrics, once for every method. A case they cannot measure (e.g. a region
+  // without free vertices) fails each method with the metrics' message, as measuring it would.
+  std::optional<EditMetrics> metrics;
+  std::exception_ptr metrics_error;
+  try {
+    metrics.emplace(rest, F, edit.region);
+  } catch (const std::exception&) {
+    metrics_error = std::current_exception();
+  }
   std::vector<MethodResult> results;
   for (const auto& method : options.methods) {
     MethodResult r;
@@ -63,7 +51,7 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
     try {
       auto deformer = make_deformer(method, options.method_options);
       auto t0 = Clock::now();
-      deformer->prepare(edit.mesh, edit.region);
+      deformer->prepare(edit.P, edit.F, edit.region);
       r.prepare_ms = ms_since(t0);
       deformer->deform(edit.transforms, r.result);  // warm-up
       std::vector<double> frames;
@@ -81,12 +69,13 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
         r.warning += (r.warning.empty() ? "" : "; ") + std::to_string(r.folded_faces) +
                      " triangles folded over the deformed base in the frame";
       r.handle_error = handle_error(rest, r.result, edit.region, edit.transforms);
-      r.rigidity = rigidity_error(rest, r.result, F).stats;
-      const DetailDistortion d = detail_distortion(rest, r.result, F, edit.region);
+      if (metrics_error) std::rethrow_exception(metrics_error);
+      r.rigidity = metrics->rigidity(r.result).stats;
+      DetailDistortion d = metrics->detail_distortion(r.result);
       r.distortion = d.stats;
-      r.distortion_per_vertex = d.per_vertex;
+      r.distortion_per_vertex = std::move(d.per_vertex);
       if (options.self_intersections) r.self_intersections = count_self_intersections(r.result, F);
-      r.volume_change = volume_change(rest, r.result, F);
+      r.volume_change = metrics->volume_change(r.result);
       r.ok = true;
     } catch (const std::exception& e) {
       r.ok = false;

@@ -1,6 +1,7 @@
 #pragma once
 //! \file Running several editing methods on one edit and measuring each result: the engine of
-//! `msdeform compare` and of the bumpy-plane regression suite.
+//! `msdeform compare` and of the regression suites (library target msd::compare). It sits above
+//! reconstruction (the named methods) and analysis (the metrics); edits come from core/edit_case.h.
 
 #include <functional>
 #include <optional>
@@ -8,25 +9,10 @@
 #include <vector>
 
 #include "analysis/metrics.h"
-#include "core/mesh.h"
-#include "core/region.h"
+#include "core/edit_case.h"
 #include "reconstruction/registry.h"
 
 namespace msd {
-
-//! An edit to run: a mesh, its region and one transform per handle.
-struct EditCase {
-  std::string name;
-  Mesh mesh;
-  Region region;
-  std::vector<Mat4> transforms;
-};
-
-//! A built-in scene (core/scenes.h) as an edit case. \throw InvalidInput for an unknown name.
-EditCase scene_case(const std::string& scene, int resolution);
-//! A mesh file with a .sel (or .dmat) region and a .def file. \throw InvalidInput naming the file, or
-//! the mismatch between the handle count of the region and the number of matrices.
-EditCase file_case(const std::string& mesh, const std::string& sel, const std::string& def);
 
 //! What one method did on one edit case.
 struct MethodResult {
@@ -58,8 +44,9 @@ struct ComparisonOptions {
 //! Checks that every method name is known, before any work. \throw InvalidInput naming the first unknown.
 void check_method_names(const std::vector<std::string>& methods);
 
-//! Runs each method on the case and measures the result. A method that throws is recorded with
-//! ok = false and its message; the others still run.
+//! Runs each method on the case and measures the result. The metrics' rest-shape data (EditMetrics) are
+//! prepared once per call, not once per method. A method that throws, or a case the metrics cannot
+//! measure, is recorded with ok = false and its message; the others still run.
 std::vector<MethodResult> compare_methods(const EditCase& edit, const ComparisonOptions& options);
 
 //! The results as a CSV table (one row per result, a header line first).

@@ -1,0 +1,40 @@
+#pragma once
+//! \file An edit to run, as arrays: a shape, its region and one transform per handle, from a built-in scene
+//! (core/scenes.h) or from files (a mesh with .sel / .dmat and .def). Used by the command line, the
+//! comparison runner and the regression tests.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/region.h"
+#include "core/subdivision.h"
+#include "core/types.h"
+
+namespace msd {
+
+//! An edit: positions, faces, region and handle transforms.
+struct EditCase {
+  std::string name;                //!< the scene's name, or the mesh file's stem
+  Positions P;                     //!< #V by 3 rest positions
+  Faces F;                         //!< #F by 3 triangles
+  Region region;                   //!< #V codes (empty when loaded without a region)
+  std::vector<Mat4> transforms;    //!< one affine 4x4 per handle (empty when loaded without them)
+  //! Built-in scenes: the Loop control mesh the surface refines (for a subdivision base); null for files.
+  std::shared_ptr<const ControlMesh> control;
+};
+
+//! A built-in scene (core/scenes.h) at about `resolution` vertices as an edit case.
+//! \throw InvalidInput for an unknown scene name.
+EditCase scene_case(const std::string& scene, int resolution);
+
+//! A mesh file with a .sel (or .dmat) region and a .def file. \throw InvalidInput naming the file, or the
+//! mismatch between the handle count of the region and the number of matrices.
+EditCase file_case(const std::string& mesh, const std::string& sel, const std::string& def);
+
+//! A mesh file with an optional region and optional transforms: an empty `sel` leaves the region empty, an
+//! empty `def` the transforms (for commands that need neither, e.g. a low-pass decomposition).
+//! \throw InvalidInput naming the file, or the handle-count mismatch when both sel and def are given.
+EditCase load_edit_case(const std::string& mesh, const std::string& sel = "", const std::string& def = "");
+
+}  // namespace msd

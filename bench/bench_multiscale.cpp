@@ -13,16 +13,15 @@
 #include "core/memory.h"
 #include "core/scenes.h"
 #include "reconstruction/multiscale.h"
-#include "reconstruction/subdivision_multiscale.h"
 
 using namespace msd::bench;
 
 
 namespace {
 // Prepares the deformer on the scene, times 30 frames and prints a row.
-void run(msd::Deformer& deformer, const msd::Mesh& mesh, const msd::Scene& scene, const char* label) {
+void run(msd::Deformer& deformer, const msd::Scene& scene, const char* label) {
   const auto t0 = Clock::now();
-  deformer.prepare(mesh, scene.region);
+  deformer.prepare(scene.P, scene.F, scene.region);
   const double prepare = seconds_since(t0);
   msd::Positions out(scene.P.rows(), 3);
   const auto frames = time_frames(30, [&](int) { deformer.deform(scene.transforms, out); });
@@ -42,17 +41,20 @@ int main(int argc, char** argv) {
       msd::SceneOptions options;
       options.resolution = msd::parse_resolution(size);
       const msd::Scene scene = msd::make_scene(name, options);
-      const msd::Mesh mesh = msd::make_mesh(scene.P, scene.F);
       for (const char* encoding : {"normal", "vectors"}) {
         msd::MultiscaleOptions o;
-        o.encoding = encoding;
-        o.low_pass.detail_scale = 0.3;
+        o.encoding.kind = msd::encoding_kind(encoding);
+        o.decomposition.low_pass.detail_scale = 0.3;
         msd::MultiscaleDeformer ms(o);
-        run(ms, mesh, scene, encoding);
+        run(ms, scene, encoding);
       }
       // The subdivision path: shell on the coarse mesh, stencil to full resolution, local-frame vectors.
-      msd::SubdivisionMultiscaleDeformer sub(scene.coarse_P, scene.coarse_F, scene.refinement);
-      run(sub, mesh, scene, "subdiv");
+      msd::MultiscaleOptions o;
+      o.decomposition.kind = msd::DecompositionKind::Subdivision;
+      o.decomposition.control = std::make_shared<msd::ControlMesh>(msd::ControlMesh{scene.coarse_P, scene.coarse_F, scene.refinement});
+      o.encoding.kind = msd::EncodingKind::Vectors;
+      msd::MultiscaleDeformer sub(o);
+      run(sub, scene, "subdiv");
     }
   return 0;
 }

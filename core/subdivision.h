@@ -14,6 +14,14 @@ struct LoopRefinement {
   int levels = 0;
 };
 
+//! A coarse control mesh together with its refinement: a mesh whose faces are refinement.faces is the
+//! Loop subdivision surface of P (the generated scenes carry one; see core/scenes.h).
+struct ControlMesh {
+  Positions P;  //!< #coarse by 3
+  Faces F;      //!< #coarse faces by 3
+  LoopRefinement refinement;
+};
+
 //! Refines the coarse connectivity (F, over num_vertices vertices) `levels` times (0 to 10).
 //! \throw InvalidInput on an index out of range or a level count out of range; TopologyError if
 //! OpenSubdiv rejects the topology.

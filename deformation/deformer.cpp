@@ -102,8 +102,10 @@ void Deformer::do_deform_to(const Positions&, Positions&) {
 }
 
 void Deformer::set_initial_guess(const Positions& X) {
-  if (traits().solve != DeformerSolve::Iterative)
-    throw UsageError(name() + " is a linear method: a frame does not depend on an initial guess");
+  if (!traits().initial_guess)
+    throw UsageError(name() + " takes no initial guess (traits().initial_guess is false): " +
+                     (traits().solve == DeformerSolve::Linear ? "a linear frame does not depend on one"
+                                                              : "it warm-starts from the last frame; reset() restarts it"));
   if (!prepared_) throw UsageError(name() + ": set_initial_guess() called before prepare()");
   if (X.rows() != num_vertices_)
     throw UsageError(name() + ": the initial guess has " + std::to_string(X.rows()) + " rows for " +
@@ -113,7 +115,7 @@ void Deformer::set_initial_guess(const Positions& X) {
 }
 
 void Deformer::do_set_initial_guess(const Positions&) {
-  throw UsageError(name() + ": declares itself iterative but takes no initial guess");
+  throw UsageError(name() + ": declares an initial guess but does not implement it");
 }
 
 void Deformer::reset() {

@@ -20,7 +20,9 @@ enum class DeformerDomain {
 
 //! How a frame is computed.
 enum class DeformerSolve {
-  Linear,     //!< a fixed linear map of the handle data: O(#V), no heap allocation once `out` is sized
+  //! a fixed linear map of the handle data: O(#V); a frame without warnings allocates nothing on the heap
+  //! once `out` is sized
+  Linear,
   Iterative,  //!< iterations from an initial guess (the last frame, set_initial_guess(), or rest after reset())
 };
 
@@ -31,10 +33,16 @@ struct DeformerTraits {
   //! Accepts explicit target positions for the constrained vertices (deform_to()), not only one affine
   //! transform per handle.
   bool vertex_targets = false;
+  //! Iterative methods whose iterations run on the output positions: set_initial_guess() seeds the next
+  //! frame. (A multi-scale method iterates on its base and detail heights; it warm-starts from the last
+  //! frame and restarts with reset().)
+  bool initial_guess = false;
   //! Fixed vertices stay and handle vertices reach T_k p exactly (to round-off). False: the constraints
   //! are met in the least-squares sense (e.g. a coarse lattice), and the frame report says by how much.
   bool exact_constraints = true;
-  //! Moving every constrained vertex by one rigid motion moves the whole shape by it.
+  //! Moving every constrained vertex by one rigid motion moves the whole shape by it. Every method
+  //! reproduces translations; linear surface methods do not reproduce rotations of a curved surface
+  //! (seed 9.4: they deform displacements, not rotations).
   bool reproduces_rigid_motions = true;
 };
 
@@ -85,9 +93,9 @@ class Deformer {
   //! non-finite target; SolverError as deform().
   void deform_to(const Positions& targets, Positions& out);
 
-  //! Iterative methods: the next frame starts from X (#V by 3) instead of the last frame's result.
-  //! \throw UsageError for a linear method, before prepare, or for a wrong shape; InvalidInput if X is
-  //! not finite.
+  //! Methods with traits().initial_guess: the next frame starts from X (#V by 3) instead of the last
+  //! frame's result. \throw UsageError for other methods, before prepare, or for a wrong shape;
+  //! InvalidInput if X is not finite.
   void set_initial_guess(const Positions& X);
   //! Back to the rest pose: the next frame of an iterative method starts from rest, a space method's map
   //! is the identity again, and the frame report is cleared. Factorisations are kept.

@@ -18,6 +18,7 @@ ShellDeformer::ShellDeformer(ShellOptions options) : options_(options) {
 DeformerTraits ShellDeformer::traits() const {
   DeformerTraits t;
   t.vertex_targets = true;
+  t.reproduces_rigid_motions = false;
   return t;
 }
 

@@ -27,7 +27,8 @@ class ShellDeformer : public Deformer {
  public:
   explicit ShellDeformer(ShellOptions options = {});
   const std::string& name() const override { return name_; }
-  //! Surface, linear, exact constraints, reproduces rigid motions, accepts per-vertex targets.
+  //! Surface, linear, exact constraints, accepts per-vertex targets; reproduces translations and affine
+  //! maps of a plane, not rotations of a curved surface (seed 9.4).
   DeformerTraits traits() const override;
   const ShellOptions& options() const { return options_; }
 

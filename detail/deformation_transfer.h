@@ -20,7 +20,7 @@ namespace msd {
 //! V = [b2 − b1, b3 − b1, n / √‖n‖] with n = (b2 − b1) × (b3 − b1) (the fourth, normal-offset vertex
 //! b4 = b1 + n / √‖n‖ scales like an edge), and the gradient of B → B' on it is G = V' V⁻¹. V⁻¹ is
 //! computed once in encode(). A base triangle that cotan_laplacian() would leave out (degenerate) or clamp
-//! (a needle: some |cot| > CotanLaplacian::kMaxCotangent; the rule is triangle_cotangents()) has no frame:
+//! (a needle: some |cot| > LaplaceOperator::kMaxCotangent; the rule is triangle_cotangents()) has no frame:
 //! its V⁻¹ would amplify the rounding of B' by up to its cotangent, far from the origin into garbage. It
 //! borrows the gradient of the nearest usable base triangle (breadth first over shared vertices); see
 //! report(). Both tests are ratios, so the choice does not depend on the scale of B.
@@ -61,7 +61,7 @@ class DeformationTransfer : public DetailEncoding {
   struct Report {
     bool identical_connectivity = false;  //!< triangle t of S ↔ triangle t of B
     //! Base triangles without a frame (they borrow a neighbour's gradient): degenerate ones, and needles
-    //! (not degenerate, some |cot| > CotanLaplacian::kMaxCotangent), by cotan_laplacian()'s rule.
+    //! (not degenerate, some |cot| > LaplaceOperator::kMaxCotangent), by cotan_laplacian()'s rule.
     int degenerate_base_faces = 0;
     int needle_base_faces = 0;
     //! Triangles of S left out of the Poisson system, and S's cotangents beyond kMaxCotangent (whose

@@ -63,6 +63,7 @@ class DisplacementVectors : public DetailEncoding {
   explicit DisplacementVectors(const DisplacementVectorOptions& options = {});
 
   std::string name() const override { return "vectors"; }
+  bool needs_same_connectivity() const override { return true; }
 
   //! S and B: #V by 3 each; Fs must equal Fb (#F by 3).
   //! \throw InvalidInput if the vertex counts or face lists differ, an index is out of range or a

@@ -175,6 +175,12 @@ class DisplacementVolumes : public DetailEncoding {
                                const NormalDisplacementOptions& normal_options = {});
 
   std::string name() const override { return "volumes"; }
+  bool iterative() const override { return true; }
+  //! The next reconstruct() starts from the encoded heights (no warm start).
+  void reset() override { have_previous_ = false; }
+  int last_iterations() const override { return report_.iterations; }
+  double last_residual() const override { return report_.max_relative_error; }
+  bool last_converged() const override { return report_.converged; }
 
   //! S: #Vs by 3 with faces Fs (#Fs by 3); B: #Vb by 3 with faces Fb (#Fb by 3); connectivities may differ.
   //! \throw InvalidInput for a face index out of range, a non-finite coordinate, an empty Fs or Fb, an

@@ -15,6 +15,17 @@ class DetailEncoding {
   virtual ~DetailEncoding() = default;
   //! Short name, e.g. "vectors", "normal".
   virtual std::string name() const = 0;
+  //! True if encode() needs S and B to share connectivity (Fs = Fb), so the base cannot be remeshed.
+  virtual bool needs_same_connectivity() const { return false; }
+  //! True if reconstruct() iterates (its result then depends on the previous frame, see reset()).
+  virtual bool iterative() const { return false; }
+  //! Iterative encodings: forget the previous frame, so the next reconstruct() starts from the encoding.
+  virtual void reset() {}
+  //! Iterative encodings: iterations and relative residual of the last reconstruct(), and whether it met
+  //! its tolerance (0, −1, true for direct ones).
+  virtual int last_iterations() const { return 0; }
+  virtual double last_residual() const { return -1; }
+  virtual bool last_converged() const { return true; }
   //! Vertices of S that an edit constrains (fixed and handle vertices). Encodings that solve a global
   //! system for S' (deformation transfer) use them as Dirichlet constraints; the others ignore them.
   //! Call before encode(). \throw InvalidInput on an index out of range at encode().

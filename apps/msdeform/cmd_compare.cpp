@@ -122,7 +122,6 @@ void add_compare_command(CLI::App& app) {
     const auto start = std::chrono::steady_clock::now();
     ComparisonOptions options;
     if (!a->methods.empty()) options.methods = a->methods;
-    options.method_options = a->method.method_options();
     options.self_intersections = !a->no_self_intersections;
     options.progress = [](const std::string& line) { std::fprintf(stderr, "  %s\n", line.c_str()); };
     check_method_names(options.methods);  // fail fast, before any work
@@ -151,6 +150,7 @@ void add_compare_command(CLI::App& app) {
     std::vector<std::vector<Image>> tiles_by_scene;
     for (const auto& c : cases) {
       std::fprintf(stderr, "%s: %zu vertices, %zu methods\n", c.name.c_str(), size_t(c.P.rows()), options.methods.size());
+      options.method_options = a->method.method_settings(c);
       std::vector<MethodResult> results = compare_methods(c, options);
       const Positions& rest = c.P;
       const Faces& F = c.F;

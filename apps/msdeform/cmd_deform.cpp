@@ -19,12 +19,13 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 std::string fold_advice(const Deformer& deformer) {
   const auto* ms = dynamic_cast<const MultiscaleDeformer*>(&deformer);
   if (!ms) return "the edit is too strong for this method";
-  if (ms->options().base == BaseKind::Fairing) return "use the low-pass base (--base low-pass, the default)";
-  const std::string& e = ms->options().encoding;
+  if (ms->options().decomposition.kind == DecompositionKind::Fairing)
+    return "use the low-pass base (--base low-pass, the default)";
+  const EncodingKind e = ms->options().encoding.kind;
   const std::string smaller = ms->decomposition_report().low_pass.automatic
                                   ? "set a --detail-scale below the automatic one"
                                   : "use a smaller --detail-scale";
-  if (e == "normal" || e == "vectors") return "try --encoding transfer or volumes, or " + smaller;
+  if (e == EncodingKind::Normal || e == EncodingKind::Vectors) return "try --encoding transfer or volumes, or " + smaller;
   return smaller;
 }
 
@@ -40,7 +41,7 @@ void add_deform_command(CLI::App& app) {
   cmd->add_option("-o,--output", *output, "Deformed mesh to write (.off .obj .ply .stl); written atomically")->required();
   cmd->callback([=] {
     const EditCase c = edit->load();
-    std::unique_ptr<Deformer> deformer = method->make();
+    std::unique_ptr<Deformer> deformer = method->make(c);
     const Positions& rest = c.P;
     auto t0 = Clock::now();
     deformer->prepare(c.P, c.F, c.region);
@@ -56,13 +57,18 @@ void add_deform_command(CLI::App& app) {
     std::printf("  prepare %.1f ms, frame %.2f ms, handle error %.3g\n", prepare_ms, frame_ms, handle_error(rest, out, c.region, c.transforms));
     if (const auto* ms = dynamic_cast<const MultiscaleDeformer*>(deformer.get())) {
       const DecompositionReport& d = ms->decomposition_report();
-      if (d.base == BaseKind::LowPass && d.low_pass.detail_scale > 0)
+      const bool low_pass = d.kind == DecompositionKind::LowPass || d.kind == DecompositionKind::Remeshed;
+      if (low_pass && d.low_pass.detail_scale > 0)
         std::printf("  base: low-pass at detail scale %.4g (%s)\n", d.low_pass.detail_scale,
                     d.low_pass.automatic ? "chosen automatically; --detail-scale sets it" : "given");
-      else if (d.base == BaseKind::LowPass)
+      else if (low_pass)
         std::printf("  base: the mesh itself (no separate detail layer found; --detail-scale sets one)\n");
-      else
+      else if (d.kind == DecompositionKind::Fairing)
         std::printf("  base: faired free region\n");
+      else
+        std::printf("  base: Loop subdivision of a control mesh of %d vertices\n", d.control_vertices);
+      if (d.kind == DecompositionKind::Remeshed)
+        std::printf("  base remeshed to edge length %.4g: %d vertices\n", d.remesh_edge_length, d.remeshed_vertices);
       std::printf("  details: max height %.4g, base's smallest curvature radius %.4g, fold ratio %.3g\n",
                   d.check.max_height, d.check.min_curvature_radius, d.check.max_fold_ratio);
       if (!d.warning.empty()) std::fprintf(stderr, "warning: %s\n", d.warning.c_str());

@@ -5,7 +5,6 @@
 #include <map>
 
 #include "core/errors.h"
-#include "reconstruction/multiscale.h"
 
 namespace msd::cli {
 
@@ -29,15 +28,21 @@ CLI::Validator nonnegative_length() {
       "LENGTH>=0");
 }
 
-void add_decomposition_options(CLI::App& cmd, BaseKind& base, double& detail_scale, int& fairing_order) {
-  cmd.add_option("--base", base,
-                 "low-pass: smooth all of S at the detail scale (keeps the shape); fairing: fair the free region "
-                 "(only for free regions small next to the shape; needs a region)")
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, BaseKind>{{"low-pass", BaseKind::LowPass}, {"fairing", BaseKind::Fairing}},
-          CLI::ignore_case))
-      ->default_str("low-pass");
-  cmd.add_option("--detail-scale", detail_scale,
+void DecompositionArgs::add_to(CLI::App& cmd) {
+  base_option =
+      cmd.add_option("--base", options.kind,
+                     "low-pass: smooth all of S at the detail scale (keeps the shape); fairing: fair the free region "
+                     "(only for free regions small next to the shape; needs a region); remeshed: the low-pass base "
+                     "remeshed isotropically (--remesh-base); subdivision: the Loop surface of the control mesh "
+                     "(built-in scenes)")
+          ->transform(CLI::CheckedTransformer(
+              std::map<std::string, DecompositionKind>{{"low-pass", DecompositionKind::LowPass},
+                                                       {"fairing", DecompositionKind::Fairing},
+                                                       {"remeshed", DecompositionKind::Remeshed},
+                                                       {"subdivision", DecompositionKind::Subdivision}},
+              CLI::ignore_case))
+          ->default_str("low-pass");
+  cmd.add_option("--detail-scale", options.low_pass.detail_scale,
                  "low-pass base: features shorter than this length (mesh units) are details; 0 chooses it from the "
                  "detail heights (where they stop growing with the scale; no detail layer: the base is the mesh)")
       ->check(nonnegative_length())
@@ -45,11 +50,33 @@ void add_decomposition_options(CLI::App& cmd, BaseKind& base, double& detail_sca
   cmd.add_option("--fairing", fairing_order, "--base fairing: order 1 membrane, 2 thin plate, 3 minimum variation")
       ->check(CLI::Range(1, 3))
       ->capture_default_str();
+  remesh_option = cmd.add_option("--remesh-base", options.remesh_edge_length,
+                                 "remeshed base: edge length (mesh units; 0 = the mean edge length); alone it selects "
+                                 "--base remeshed")
+                      ->check(nonnegative_length())
+                      ->capture_default_str();
+}
+
+DecompositionOptions DecompositionArgs::resolve(const EditCase& edit) const {
+  DecompositionOptions o = options;
+  o.fairing = static_cast<FairingOrder>(fairing_order);
+  if (remesh_option && remesh_option->count() > 0) {
+    if (base_option && base_option->count() > 0 && o.kind != DecompositionKind::Remeshed)
+      throw InvalidInput(std::string("--remesh-base applies to --base remeshed, not --base ") + to_string(o.kind));
+    o.kind = DecompositionKind::Remeshed;
+  }
+  if (o.kind == DecompositionKind::Subdivision) {
+    if (!edit.control)
+      throw InvalidInput("--base subdivision needs a mesh with Loop subdivision connectivity and its control mesh; "
+                         "the built-in scenes (--scene) carry one, " + edit.name + " does not: use --base low-pass");
+    o.control = edit.control;
+  }
+  return o;
 }
 
 void DeformerOptions::add_to(CLI::App& cmd) {
   cmd.add_option("--method", method, "Editing method: shell|propagate|multiscale (with --encoding), or a full name: " +
-                                         joined(method_names(), "|"))
+                                         joined(builtin_methods().names(), "|"))
       ->capture_default_str();
   encoding_option = cmd.add_option("--encoding", encoding, "multiscale: detail encoding: " + joined(encoding_names(), "|"))
       ->capture_default_str();
@@ -58,34 +85,36 @@ void DeformerOptions::add_to(CLI::App& cmd) {
 
 void DeformerOptions::add_settings(CLI::App& cmd) {
   auto* shell = cmd.add_option_group("shell", "shell and multiscale: the thin-shell operator (9.2)");
-  shell->add_option("--ks", options.shell.ks, "stretching stiffness (membrane)")->capture_default_str();
-  shell->add_option("--kb", options.shell.kb, "bending stiffness (thin plate)")->capture_default_str();
+  shell->add_option("--ks", settings.shell.ks, "stretching stiffness (membrane)")->capture_default_str();
+  shell->add_option("--kb", settings.shell.kb, "bending stiffness (thin plate)")->capture_default_str();
   auto* prop = cmd.add_option_group("propagate", "propagate: transformation propagation (9.1)");
-  prop->add_option("--field", options.propagation.field, "blend field: euclidean, geodesic or harmonic")
+  prop->add_option("--field", settings.propagation.field, "blend field: euclidean, geodesic or harmonic")
       ->transform(CLI::CheckedTransformer(
           std::map<std::string, PropagationField>{{"euclidean", PropagationField::Euclidean},
                                                   {"geodesic", PropagationField::Geodesic},
                                                   {"harmonic", PropagationField::Harmonic}},
           CLI::ignore_case))
       ->default_str("harmonic");
-  prop->add_option("--blend", options.propagation.blend,
+  prop->add_option("--blend", settings.propagation.blend,
                    "matrix (s T(p) + (1-s) p) or decomposed (slerp rotation, scale/shear, translation)")
       ->transform(CLI::CheckedTransformer(
           std::map<std::string, PropagationBlend>{{"matrix", PropagationBlend::Matrix},
                                                   {"decomposed", PropagationBlend::Decomposed}},
           CLI::ignore_case))
       ->default_str("matrix");
-  prop->add_option("--transfer", options.propagation.transfer, "transfer function of s: linear or smoothstep")
+  prop->add_option("--transfer", settings.propagation.transfer, "transfer function of s: linear or smoothstep")
       ->transform(CLI::CheckedTransformer(
           std::map<std::string, PropagationTransfer>{{"linear", PropagationTransfer::Linear},
                                                      {"smoothstep", PropagationTransfer::SmoothStep}},
           CLI::ignore_case))
       ->default_str("linear");
   auto* ms = cmd.add_option_group("multiscale", "multiscale: decompose, deform the base, add the details back (9.3)");
-  add_decomposition_options(*ms, options.base, options.low_pass.detail_scale, fairing_order);
-  ms->add_option("--remesh-base", options.remesh_base_edge_length,
-                 "remesh the base isotropically to this edge length before encoding (0: keep S's triangles)")
-      ->check(nonnegative_length())
+  decomposition.add_to(*ms);
+  std::vector<std::string> single_scale;
+  for (const auto& n : builtin_methods().names())
+    if (n.rfind("multiscale", 0) != 0) single_scale.push_back(n);
+  ms->add_option("--base-method", settings.base_method, "the method that deforms the base: " + joined(single_scale, "|"))
+      ->check(CLI::IsMember(single_scale))
       ->capture_default_str();
 }
 
@@ -97,12 +126,14 @@ std::string DeformerOptions::method_name() const {
   return method;
 }
 
-MethodOptions DeformerOptions::method_options() const {
-  MethodOptions o = options;
-  o.fairing = static_cast<FairingOrder>(fairing_order);
-  return o;
+MethodSettings DeformerOptions::method_settings(const EditCase& edit) const {
+  MethodSettings s = settings;
+  s.decomposition = decomposition.resolve(edit);
+  return s;
 }
 
-std::unique_ptr<Deformer> DeformerOptions::make() const { return make_deformer(method_name(), method_options()); }
+std::unique_ptr<Deformer> DeformerOptions::make(const EditCase& edit) const {
+  return builtin_methods().make(method_name(), method_settings(edit));
+}
 
 }  // namespace msd::cli

@@ -1,38 +1,52 @@
 #pragma once
-// Command-line options that choose and configure an editing method (see reconstruction/registry.h).
+// Command-line options that choose and configure an editing method from the catalogue
+// (reconstruction/catalogue.h).
 
 #include <memory>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
-#include "reconstruction/registry.h"
+#include "core/edit_case.h"
+#include "reconstruction/catalogue.h"
 
 namespace msd::cli {
 
 // Checks that an option is a finite length >= 0, naming the option.
 CLI::Validator nonnegative_length();
 
-// --base, --detail-scale and --fairing: how the multi-scale base is computed (deform, compare, decompose).
-void add_decomposition_options(CLI::App& cmd, BaseKind& base, double& detail_scale, int& fairing_order);
+// --base, --detail-scale, --fairing and --remesh-base: how the multi-scale base is computed (deform,
+// compare, decompose). Call resolve_decomposition() after parsing.
+struct DecompositionArgs {
+  DecompositionOptions options;
+  int fairing_order = 2;
+  CLI::Option* base_option = nullptr;
+  CLI::Option* remesh_option = nullptr;
+  void add_to(CLI::App& cmd);
+  // The options with the fairing order applied; --remesh-base alone selects the remeshed base. The
+  // subdivision base takes the control mesh of the edit (built-in scenes carry one). Throws InvalidInput
+  // for --remesh-base with another base, or a subdivision base for a mesh without a control mesh.
+  DecompositionOptions resolve(const EditCase& edit) const;
+};
 
 struct DeformerOptions {
   std::string method = "shell";
   std::string encoding = "normal";
   CLI::Option* encoding_option = nullptr;  // set by add_to(): whether --encoding was given
-  int fairing_order = 2;
-  MethodOptions options;
+  MethodSettings settings;
+  DecompositionArgs decomposition;
   // --method, --encoding and add_settings().
   void add_to(CLI::App& cmd);
-  // The methods' settings alone (operator, propagation, multi-scale decomposition), for runs of several methods.
+  // The methods' settings alone (operator, propagation, multi-scale decomposition and base method), for
+  // runs of several methods.
   void add_settings(CLI::App& cmd);
-  // The registry name: --method, with "multiscale" completed by --encoding. Throws InvalidInput when
+  // The catalogue name: --method, with "multiscale" completed by --encoding. Throws InvalidInput when
   // --encoding was given with another method.
   std::string method_name() const;
-  // The chosen method, configured. Throws InvalidInput for an unknown name, listing the known ones.
-  std::unique_ptr<Deformer> make() const;
-  // The options alone, with the fairing order applied (for runs of several methods).
-  MethodOptions method_options() const;
+  // The settings for an edit (the decomposition resolved for it).
+  MethodSettings method_settings(const EditCase& edit) const;
+  // The chosen method, configured for the edit. Throws InvalidInput for an unknown name, listing the known ones.
+  std::unique_ptr<Deformer> make(const EditCase& edit) const;
 };
 
 }  // namespace msd::cli

@@ -1,0 +1,67 @@
+#include "reconstruction/catalogue.h"
+
+#include "core/errors.h"
+
+namespace msd {
+
+void Catalogue::add(MethodEntry entry) {
+  if (entry.name.empty()) throw InvalidInput("catalogue: a method needs a name");
+  if (!entry.make) throw InvalidInput("catalogue: method '" + entry.name + "' has no factory");
+  for (const auto& e : entries_)
+    if (e.name == entry.name) throw InvalidInput("catalogue: method '" + entry.name + "' is already listed");
+  entries_.push_back(std::move(entry));
+}
+
+std::vector<std::string> Catalogue::names() const {
+  std::vector<std::string> out;
+  for (const auto& e : entries_) out.push_back(e.name);
+  return out;
+}
+
+const MethodEntry& Catalogue::find(const std::string& name) const {
+  for (const auto& e : entries_)
+    if (e.name == name) return e;
+  std::string known;
+  for (const auto& e : entries_) known += (known.empty() ? "" : ", ") + e.name;
+  throw InvalidInput("unknown method '" + name + "' (known: " + known + ")");
+}
+
+std::unique_ptr<Deformer> Catalogue::make(const std::string& name, const MethodSettings& settings) const {
+  return find(name).make(settings, *this);
+}
+
+namespace {
+
+Catalogue make_builtin() {
+  Catalogue c;
+  c.add({"shell", "9.2", "linearised thin shell −ks·Δd + kb·Δ²d = 0, factored once, precomputed basis per handle",
+         [](const MethodSettings& s, const Catalogue&) { return std::make_unique<ShellDeformer>(s.shell); }});
+  c.add({"propagate", "9.1", "transformation propagation: a blend field damps each handle's transform",
+         [](const MethodSettings& s, const Catalogue&) {
+           return std::make_unique<TransformationPropagation>(s.propagation);
+         }});
+  for (const std::string& encoding : encoding_names())
+    c.add({"multiscale-" + encoding, "9.3",
+           "multi-scale: decompose S = B ⊕ D, deform B with the base method, add the " + encoding + " details back",
+           [encoding](const MethodSettings& s, const Catalogue& catalogue) -> std::unique_ptr<Deformer> {
+             if (s.base_method.rfind("multiscale", 0) == 0)
+               throw InvalidInput("multiscale-" + encoding + ": the base method '" + s.base_method +
+                                  "' is itself multi-scale; give a single-scale method (shell, propagate, ...)");
+             MultiscaleOptions o;
+             o.decomposition = s.decomposition;
+             o.encoding = s.encoding;
+             o.encoding.kind = encoding_kind(encoding);
+             return std::make_unique<MultiscaleDeformer>(o, catalogue.make(s.base_method, s),
+                                                         "multiscale-" + encoding);
+           }});
+  return c;
+}
+
+}  // namespace
+
+const Catalogue& builtin_methods() {
+  static const Catalogue catalogue = make_builtin();
+  return catalogue;
+}
+
+}  // namespace msd

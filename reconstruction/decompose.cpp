@@ -1,0 +1,187 @@
+#include "reconstruction/decompose.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "core/checks.h"
+#include "core/errors.h"
+#include "core/mesh.h"
+#include "core/laplacian.h"
+#include "decomposition/remesh.h"
+#include "detail/closest_point.h"
+
+namespace msd {
+
+namespace {
+
+constexpr DecompositionKind kKinds[] = {DecompositionKind::LowPass, DecompositionKind::Fairing,
+                                        DecompositionKind::Remeshed, DecompositionKind::Subdivision};
+
+// A base with less than this fraction of S's area around the free region has lost the shape.
+constexpr double kMinBaseAreaRatio = 0.5;
+
+// What to change when the decomposition is refused or warned about.
+std::string remedy(const DecompositionReport& r) {
+  if (r.kind == DecompositionKind::Fairing)
+    return "fairing the free region removed the shape with the details (the free region is large or tube-like "
+           "next to the shape); use the low-pass base (--base low-pass, the default), which keeps the shape, or a "
+           "smaller free region";
+  if (r.kind == DecompositionKind::Subdivision)
+    return "the control mesh is too coarse for this shape; use the low-pass base (--base low-pass)";
+  if (!r.low_pass.automatic) {
+    char text[160];
+    std::snprintf(text, sizeof text, "the detail scale %g is too large for this shape; use a smaller one, or 0 to "
+                  "choose it automatically", r.low_pass.detail_scale);
+    return text;
+  }
+  return "the mesh has defects there (slivers or near-duplicate vertices); repair them, or set a smaller detail scale";
+}
+
+// Refuses a base that lost the shape (less than half the area of S where S is free to move) or that the
+// details fold over at rest (beyond a few defect vertices), naming the cause and a remedy; returns a warning
+// when a few vertices fold or the details come close to folding.
+std::string check_decomposition(const DecompositionReport& r, const DecompositionOptions& o, long num_vertices) {
+  if (r.area_ratio < kMinBaseAreaRatio) {
+    char text[200];
+    std::snprintf(text, sizeof text, "multiscale: the base lost the shape (its area around the free region is %.3g "
+                  "of the input's; the details would be the shape itself): ", r.area_ratio);
+    throw TopologyError(text + remedy(r));
+  }
+  const DetailCheck& c = r.check;
+  const bool folds = c.folding_vertices > 0, tall = c.fold_ratio_p999 > o.low_pass.max_fold_ratio;
+  if (!folds && !tall) return {};
+  char where[200];
+  std::snprintf(where, sizeof where, "near vertex %d the detail height %.3g is %.3g times the base's curvature radius %.3g",
+                c.worst_vertex, c.worst_height, c.max_fold_ratio, c.worst_radius);
+  if (c.folding_vertices > static_cast<long>(1e-3 * static_cast<double>(num_vertices)))
+    throw TopologyError("multiscale: the details fold over at rest (" + std::to_string(c.folding_vertices) +
+                        " vertices with a height above the base's curvature radius; " + where + "): " + remedy(r));
+  if (folds)
+    return "multiscale: the details of " + std::to_string(c.folding_vertices) + " vertices fold over at rest (" +
+           where + "): " + remedy(r);
+  return std::string("multiscale: the details come close to folding over the base (") + where +
+         "); an edit that bends the base further may fold them: " + remedy(r);
+}
+
+// Area of B over the area of S on the triangles with a free vertex (all of them when none is free).
+double free_area_ratio(const Positions& S, const Positions& B, const Faces& F, const Region& region) {
+  double rest = 0, base = 0;
+  const Eigen::VectorXd a = face_areas(S, F), b = face_areas(B, F);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    if (region.code(F(f, 0)) == Region::kFree || region.code(F(f, 1)) == Region::kFree ||
+        region.code(F(f, 2)) == Region::kFree)
+      rest += a[f], base += b[f];
+  return rest > 0 ? base / rest : a.sum() > 0 ? b.sum() / a.sum() : 1.0;
+}
+
+// Remeshes B (the low-pass base) and moves the roles onto it. A remeshed base must stay as close to S as
+// B is (up to 1 % of the diagonal): an edge length beyond the base's curvature radius cuts the shape
+// (measured: edge 2 on the survey cylinder of radius 1 folds 765 triangles).
+void remesh_base(const Positions& S, const Region& region, double edge, Decomposition& d) {
+  RemeshResult r = remesh_isotropic(d.base, d.base_faces, edge);
+  const std::vector<ClosestPoint> feet = ClosestPointQuery(r.P, r.F).query_all(S);  // S onto the new base
+  DecompositionReport& report = d.report;
+  report.remeshed_vertices = static_cast<int>(r.P.rows());
+  report.remesh_edge_length = edge;
+  double far = 0;
+  for (const ClosestPoint& c : feet) far = std::max(far, std::sqrt(c.squared_distance));
+  const double allowed = std::max(2 * report.check.max_height, 0.01 * bounding_box_diagonal(S));
+  if (!(far <= allowed)) {
+    char text[300];
+    std::snprintf(text, sizeof text, "multiscale: the base remeshed to edge length %g (%d vertices) lies up to %.3g "
+                  "from the input, more than %.3g (twice the detail height, or 1 %% of the diagonal): the edges are "
+                  "too long for the shape; use a smaller --remesh-base", edge, report.remeshed_vertices, far, allowed);
+    throw InvalidInput(text);
+  }
+  // Every triangle that holds the closest point of a fixed or handle vertex of S gets that vertex's role on
+  // all its corners, so those base points move exactly with their handle (or stay); the rest are free.
+  std::vector<int> codes(r.P.rows(), Region::kFree);
+  for (int v : region.constrained_vertices())
+    for (int k = 0; k < 3; ++k) codes[r.F(feet[v].face, k)] = region.code(v);
+  d.edit_region = Region::from_codes(std::move(codes));
+  d.base = std::move(r.P);
+  d.base_faces = std::move(r.F);
+}
+
+}  // namespace
+
+const char* to_string(DecompositionKind kind) {
+  switch (kind) {
+    case DecompositionKind::LowPass:
+      return "low-pass";
+    case DecompositionKind::Fairing:
+      return "fairing";
+    case DecompositionKind::Remeshed:
+      return "remeshed";
+    case DecompositionKind::Subdivision:
+      return "subdivision";
+  }
+  return "invalid";
+}
+
+DecompositionKind decomposition_kind(const std::string& name) {
+  for (DecompositionKind k : kKinds)
+    if (name == to_string(k)) return k;
+  throw InvalidInput("unknown decomposition '" + name + "' (known: low-pass, fairing, remeshed, subdivision)");
+}
+
+Decomposition decompose(const Positions& S, const Faces& F, const Region& region, const DecompositionOptions& o) {
+  check_mesh_arrays(S, F, "decompose");
+  if (region.num_vertices() != S.rows())
+    throw InvalidInput("decompose: the region has " + std::to_string(region.num_vertices()) +
+                       " vertex labels but the mesh has " + std::to_string(S.rows()) + " vertices");
+  if (!(o.low_pass.detail_scale >= 0) || !std::isfinite(o.low_pass.detail_scale))
+    throw InvalidInput("decompose: the detail scale must be finite and >= 0 (0 = automatic)");
+  if (!(o.remesh_edge_length >= 0) || !std::isfinite(o.remesh_edge_length))
+    throw InvalidInput("decompose: the remeshing edge length must be finite and >= 0 (0 = the mean edge length)");
+  Decomposition d;
+  DecompositionReport& report = d.report;
+  report.kind = o.kind;
+  d.base_faces = F;
+  d.edit_region = region;
+  switch (o.kind) {
+    case DecompositionKind::LowPass:
+    case DecompositionKind::Remeshed:
+      d.base = low_pass_base(S, F, o.low_pass, &report.low_pass);  // S → B
+      report.check = report.low_pass.check;
+      break;
+    case DecompositionKind::Fairing: {
+      FairingOptions fairing;
+      fairing.order = o.fairing;
+      d.base = fair_region(S, F, region, fairing);
+      report.check = check_details(S, d.base, F);
+      break;
+    }
+    case DecompositionKind::Subdivision: {
+      if (!o.control)
+        throw InvalidInput("decompose: a subdivision base needs the control mesh that the input refines (the "
+                           "built-in scenes carry one); use the low-pass base for other meshes");
+      if (F.rows() != o.control->refinement.faces.rows() || F != o.control->refinement.faces)
+        throw InvalidInput("decompose: the mesh is not the Loop refinement of the control mesh (its faces differ); "
+                           "use the low-pass base for general meshes");
+      auto hierarchy = std::make_shared<SubdivisionHierarchy>();
+      hierarchy->build(S, F, o.control->P, o.control->F, o.control->refinement);  // B = Loop(control points)
+      d.base = hierarchy->base();
+      d.edit = hierarchy->control_points();
+      d.edit_faces = o.control->F;
+      d.edit_region = hierarchy->coarse_region(region);
+      report.control_vertices = static_cast<int>(d.edit.rows());
+      report.check = check_details(S, d.base, F);
+      d.hierarchy = std::move(hierarchy);
+      break;
+    }
+    default:
+      throw InvalidInput("decompose: invalid DecompositionKind " + std::to_string(static_cast<int>(o.kind)));
+  }
+  report.area_ratio = free_area_ratio(S, d.base, F, region);
+  report.warning = check_decomposition(report, o, S.rows());
+  if (o.kind == DecompositionKind::Remeshed)
+    remesh_base(S, region, o.remesh_edge_length > 0 ? o.remesh_edge_length : mean_edge_length(S, F), d);
+  // Without a detail layer (B = S, see low_pass_base) every encoding would give S' = B'.
+  d.base_is_input = o.kind == DecompositionKind::LowPass && d.base == S;
+  if (!d.hierarchy) d.edit = d.base, d.edit_faces = d.base_faces;
+  return d;
+}
+
+}  // namespace msd

@@ -1,0 +1,296 @@
+// The conformance suite: every row of the method catalogue — the built-in methods and the two test
+// fixtures (a space lattice and an iterative solver) — keeps the promises of the editing seam
+// (deformation/deformer.h): constraints met as its traits say, rigid motions reproduced where promised,
+// targets equal to affine frames, reset() back to rest, the frame report filled in, no heap allocation
+// in a frame of a linear method, and on bad input either a named msd::Error or a finite result.
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "conformance/iterative_deformer.h"
+#include "conformance/lattice_deformer.h"
+#include "core/errors.h"
+#include "core/scenes.h"
+#include "reconstruction/catalogue.h"
+#include "test_util.h"
+
+// Counts calls of the global operator new while `counting` is set (the frames of linear methods must not
+// allocate; Eigen's own buffers go through malloc and are sized in prepare()).
+namespace {
+std::atomic<bool> counting{false};
+std::atomic<long> allocations{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  if (counting) ++allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+  if (counting) ++allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+namespace msd {
+namespace {
+
+using Catch::Matchers::Contains;
+
+// The catalogue under test: the built-in rows plus one row per fixture.
+const Catalogue& catalogue() {
+  static const Catalogue c = [] {
+    Catalogue c = builtin_methods();
+    c.add({"test-lattice", "9.5", "test fixture: trilinear 2×2×2 lattice",
+           [](const MethodSettings&, const Catalogue&) { return std::make_unique<test::LatticeDeformer>(); }});
+    c.add({"test-iterative", "9.2", "test fixture: harmonic displacement by conjugate gradients",
+           [](const MethodSettings&, const Catalogue&) { return std::make_unique<test::IterativeDeformer>(); }});
+    return c;
+  }();
+  return c;
+}
+
+// The bumpy bar bent by 120°: its fixed and handle rings span all three dimensions.
+const Scene& bar() {
+  static const Scene s = [] {
+    SceneOptions o;
+    o.resolution = 2500;
+    return make_scene("bar-bend120", o);
+  }();
+  return s;
+}
+
+// A rigid motion: rotation by 0.7 rad about (1, 2, 3) and a translation.
+Mat4 rigid() {
+  Mat4 T = Mat4::Identity();
+  T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  T.topRightCorner<3, 1>() = Vec3(0.3, -0.2, 0.5);
+  return T;
+}
+
+double max_constraint_error(const Positions& rest, const Positions& out, const Region& region,
+                            const std::vector<Mat4>& transforms) {
+  double e = 0;
+  for (int v : region.constrained_vertices()) {
+    const int k = region.handle_of(v);
+    const Vec3 target = k < 0 ? Vec3(rest.row(v)) : transform_point(transforms[k], rest.row(v));
+    e = std::max(e, (Vec3(out.row(v)) - target).norm());
+  }
+  return e;
+}
+
+// Runs f on every catalogue row with a fresh deformer, as a Catch2 section per method.
+template <class F>
+void for_every_method(F&& f) {
+  for (const auto& entry : catalogue().entries()) {
+    DYNAMIC_SECTION(entry.name) {
+      std::unique_ptr<Deformer> d = catalogue().make(entry.name);
+      REQUIRE(d->name() == entry.name);
+      f(*d);
+    }
+  }
+}
+
+TEST_CASE("conformance: constraints, frame report and reset", "[conformance]") {
+  const Scene& s = bar();
+  const double diag = bounding_box_diagonal(s.P);
+  for_every_method([&](Deformer& d) {
+    const DeformerTraits t = d.traits();
+    d.prepare(s.P, s.F, s.region);
+    const Positions first = d.deform(s.transforms);
+    REQUIRE(first.rows() == s.P.rows());
+    REQUIRE(first.allFinite());
+    const FrameReport& r = d.frame_report();
+    const double error = max_constraint_error(s.P, first, s.region, s.transforms);
+    if (t.exact_constraints) {
+      CHECK(error <= 1e-9 * diag);
+    } else {
+      CHECK(r.constraint_error == Approx(error).margin(1e-12 * diag));  // measured and reported
+      CHECK(r.constraint_error >= 0);
+    }
+    if (t.solve == DeformerSolve::Iterative) {
+      CHECK(r.iterations >= 1);
+      CHECK(r.residual >= 0);
+    } else {
+      CHECK(r.iterations == 0);
+    }
+    if (d.name().rfind("multiscale", 0) == 0) CHECK(r.folded_faces >= 0);
+    CHECK(r.converged);
+    CHECK(r.warnings.empty() == (r.converged && r.folded_faces <= 0));
+    // reset() returns to rest: the next frame is the first one again (iterative: to its tolerance).
+    d.reset();
+    const Positions again = d.deform(s.transforms);
+    CHECK(test::max_row_distance(first, again) <= 1e-6 * diag);
+    // The identity moves nothing.
+    d.reset();
+    CHECK(test::max_row_distance(d.deform({Mat4::Identity()}), s.P) <= 1e-6 * diag);
+  });
+}
+
+TEST_CASE("conformance: a rigid motion (a translation for every method) of all constrained vertices moves the whole shape",
+          "[conformance]") {
+  const Scene& s = bar();
+  const double diag = bounding_box_diagonal(s.P);
+  std::vector<int> codes = s.region.codes();
+  for (int& c : codes)
+    if (c != Region::kFree) c = Region::kFirstHandle;  // fixed and handle: one handle
+  const Region one = Region::from_codes(codes);
+  const Mat4 T = rigid();
+  Positions expected(s.P.rows(), 3);
+  for (Eigen::Index v = 0; v < s.P.rows(); ++v) expected.row(v) = transform_point(T, s.P.row(v));
+  Mat4 shift = Mat4::Identity();
+  shift.topRightCorner<3, 1>() = Vec3(0.3, -0.2, 0.5);
+  for_every_method([&](Deformer& d) {
+    d.prepare(s.P, s.F, one);
+    const Positions moved = d.deform({shift});
+    CHECK(test::max_row_distance(moved, test::rigid_motion(s.P, Mat3::Identity(), Vec3(0.3, -0.2, 0.5))) <= 1e-9 * diag);
+    const double error = test::max_row_distance(d.deform({T}), expected);
+    if (d.traits().reproduces_rigid_motions)
+      CHECK(error <= 1e-6 * diag);
+    else
+      CHECK(error > 1e-3 * diag);  // declared honestly: the rotation is visibly not reproduced
+  });
+}
+
+TEST_CASE("conformance: explicit targets equal the affine frame, and linear frames allocate nothing", "[conformance]") {
+  SceneOptions o;  // the lifted bumpy plane: no method folds a triangle there, so no frame has a warning
+  o.resolution = 2500;
+  const Scene s = make_scene("lift", o);
+  const double diag = bounding_box_diagonal(s.P);
+  const std::vector<int> constrained = s.region.constrained_vertices();
+  std::vector<int> handle_of;
+  for (int v : constrained) handle_of.push_back(s.region.handle_of(v));
+  Positions targets;
+  affine_targets(s.P, constrained, handle_of, s.transforms, targets);
+  for_every_method([&](Deformer& d) {
+    const DeformerTraits t = d.traits();
+    d.prepare(s.P, s.F, s.region);
+    Positions out;
+    d.deform(s.transforms, out);  // sizes every buffer
+    if (t.solve == DeformerSolve::Linear) {
+      allocations = 0;
+      counting = true;
+      d.deform(s.transforms, out);
+      counting = false;
+      CHECK(d.frame_report().warnings.empty());
+      CHECK(allocations == 0);
+    }
+    Positions by_targets;
+    if (t.vertex_targets) {
+      d.reset();
+      d.deform_to(targets, by_targets);
+      CHECK(test::max_row_distance(by_targets, out) <= 1e-8 * diag);
+    } else {
+      CHECK_THROWS_AS(d.deform_to(targets, by_targets), UsageError);
+    }
+    if (t.initial_guess) {
+      d.set_initial_guess(out);  // from the solution: at most a few iterations
+      d.deform(s.transforms, by_targets);
+      CHECK(test::max_row_distance(by_targets, out) <= 1e-6 * diag);
+    } else {
+      CHECK_THROWS_AS(d.set_initial_guess(out), UsageError);
+    }
+  });
+}
+
+TEST_CASE("conformance: space methods deform any points, with or without faces", "[conformance]") {
+  const Scene& s = bar();
+  for_every_method([&](Deformer& d) {
+    Positions mapped;
+    if (d.traits().domain != DeformerDomain::Space) {
+      d.prepare(s.P, s.F, s.region);
+      CHECK_THROWS_AS(d.evaluate(s.P, mapped), UsageError);
+      return;
+    }
+    d.prepare(s.P, Faces(0, 3), s.region);  // a point cloud
+    d.evaluate(s.P, mapped);
+    CHECK(test::max_row_distance(mapped, s.P) == 0.0);  // identity before the first frame
+    const Positions out = d.deform(s.transforms);
+    d.evaluate(s.P, mapped);
+    CHECK(test::max_row_distance(mapped, out) <= 1e-12);  // the frame is its map at the rest points
+    d.reset();
+    d.evaluate(s.P, mapped);
+    CHECK(test::max_row_distance(mapped, s.P) == 0.0);
+  });
+}
+
+// One bad input: prepare and a frame either throw a named msd::Error or give a finite #V by 3 result.
+void survives(Deformer& d, const Positions& P, const Faces& F, const Region& region, const std::vector<Mat4>& T,
+              const std::string& what) {
+  INFO(d.name() << " on " << what);
+  try {
+    d.prepare(P, F, region);
+    const Positions out = d.deform(T);
+    CHECK(out.rows() == P.rows());
+    CHECK(out.allFinite());
+  } catch (const Error& e) {
+    CHECK(std::string(e.what()).size() > 10);  // a message, naming what is wrong
+  }
+}
+
+TEST_CASE("conformance: the bad-input corpus gives an error or a finite result", "[conformance][bad-input]") {
+  SceneOptions o;
+  o.resolution = 600;
+  const Scene s = make_scene("bar-bend120", o);
+  const int nv = static_cast<int>(s.P.rows());
+  const int free_vertex = s.region.free_vertices()[s.region.free_vertices().size() / 2];
+  for_every_method([&](Deformer& d) {
+    Positions P = s.P;
+    P(free_vertex, 1) = std::nan("");
+    survives(d, P, s.F, s.region, s.transforms, "a NaN coordinate");
+    Faces F = s.F;
+    F(3, 1) = nv + 5;
+    survives(d, s.P, F, s.region, s.transforms, "a face index out of range");
+    survives(d, s.P, s.F, Region(nv - 1), s.transforms, "a region of the wrong size");
+    survives(d, s.P, s.F, Region(nv), {}, "a region without a handle");
+    P = s.P;  // a free vertex moved onto its neighbour: zero-area triangles and a duplicate position
+    P.row(free_vertex) = P.row(s.F(0, 0) == free_vertex ? s.F(0, 1) : s.F(0, 0));
+    for (Eigen::Index f = 0; f < s.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k)
+        if (s.F(f, k) == free_vertex) P.row(free_vertex) = s.P.row(s.F(f, (k + 1) % 3));
+    survives(d, P, s.F, s.region, s.transforms, "a collapsed free vertex (degenerate triangles)");
+    P = s.P;
+    P.row(free_vertex) *= 1e6;  // a spike far away
+    survives(d, P, s.F, s.region, s.transforms, "a spike");
+    Positions extra(nv + 1, 3);  // an isolated free vertex no face uses
+    extra << s.P, Eigen::RowVector3d(5, 5, 5);
+    std::vector<int> codes = s.region.codes();
+    codes.push_back(Region::kFree);
+    survives(d, extra, s.F, Region::from_codes(codes), s.transforms, "an isolated free vertex");
+    // Frames with bad transforms are refused by name on a good preparation.
+    d.prepare(s.P, s.F, s.region);
+    Mat4 nan = Mat4::Identity();
+    nan(0, 3) = std::nan("");
+    CHECK_THROWS_AS(d.deform({nan}), InvalidInput);
+    Mat4 projective = Mat4::Identity();
+    projective(3, 0) = 0.5;
+    CHECK_THROWS_WITH(d.deform({projective}), Contains("not affine"));
+    CHECK_THROWS_AS(d.deform({Mat4::Identity(), Mat4::Identity()}), UsageError);
+  });
+}
+
+TEST_CASE("conformance: the catalogue refuses unknown and duplicate names", "[conformance]") {
+  CHECK_THROWS_WITH(builtin_methods().make("shel"), Contains("unknown method 'shel'") && Contains("shell"));
+  Catalogue c = builtin_methods();
+  CHECK_THROWS_WITH(c.add({"shell", "", "", [](const MethodSettings& s, const Catalogue&) {
+                             return std::make_unique<ShellDeformer>(s.shell);
+                           }}),
+                    Contains("already listed"));
+  MethodSettings nested;
+  nested.base_method = "multiscale-normal";
+  CHECK_THROWS_WITH(builtin_methods().make("multiscale-vectors", nested), Contains("itself multi-scale"));
+  MethodSettings lattice_base;  // any row can deform the base, e.g. the space lattice fixture
+  lattice_base.base_method = "test-lattice";
+  const Scene& s = bar();
+  std::unique_ptr<Deformer> d = catalogue().make("multiscale-normal", lattice_base);
+  d->prepare(s.P, s.F, s.region);
+  CHECK(d->deform(s.transforms).allFinite());
+}
+
+}  // namespace
+}  // namespace msd

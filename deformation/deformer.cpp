@@ -29,6 +29,7 @@ void affine_targets(const Positions& rest, const std::vector<int>& constrained, 
 void Deformer::prepare(const Positions& P, const Faces& F, const Region& region) {
   prepared_ = false;
   frame_report_ = {};
+  prepare_warnings_.clear();
   const bool surface = traits().domain == DeformerDomain::Surface;
   check_mesh_arrays(P, F, name().c_str());
   if (surface && F.rows() == 0)

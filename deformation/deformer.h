@@ -109,6 +109,9 @@ class Deformer {
 
   bool prepared() const { return prepared_; }
   const FrameReport& frame_report() const { return frame_report_; }
+  //! What prepare() found that the user should know (e.g. details close to folding over a multi-scale
+  //! base), each naming a remedy; empty when all is well.
+  const std::vector<std::string>& prepare_warnings() const { return prepare_warnings_; }
   int num_handles() const { return num_handles_; }
   int num_vertices() const { return num_vertices_; }
 
@@ -125,6 +128,7 @@ class Deformer {
   virtual void do_evaluate(const Positions& points, Positions& out) const;
 
   FrameReport frame_report_;  //!< filled by the frame where the method measures something
+  std::vector<std::string> prepare_warnings_;  //!< filled by do_prepare() (cleared before it)
 
  private:
   void begin_frame(Positions& out);

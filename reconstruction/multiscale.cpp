@@ -33,12 +33,14 @@ DeformerTraits MultiscaleDeformer::traits() const {
 void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Region& region) {
   decomposition_ = decompose(S, F, region, options_.decomposition);
   const Decomposition& d = decomposition_;
+  if (!d.report.warning.empty()) prepare_warnings_.push_back(d.report.warning);
   try {
     base_deformer_->prepare(d.edit, d.edit_faces, d.edit_region);
   } catch (const Error& e) {
     throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on the base B (not the "
                       "input mesh); the base is degenerate there, try a smaller detail scale: " + e.what());
   }
+  for (const std::string& w : base_deformer_->prepare_warnings()) prepare_warnings_.push_back(w);
   encoding_->set_anchor_vertices(region.constrained_vertices());
   if (!d.base_is_input) encoding_->encode(S, F, d.base, d.base_faces);  // D = S ⊖ B
   edit_deformed_ = d.edit;
@@ -78,8 +80,9 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
   for (const std::string& w : base.warnings) r.warnings.push_back(w);
   r.folded_faces = fold_check_.count(out, base_deformed_);
   if (r.folded_faces > 0)
-    r.warnings.push_back(name_ + ": " + std::to_string(r.folded_faces) + " triangles folded over the deformed base; "
-                         "a smaller detail scale or the volumes encoding keeps them apart");
+    r.warnings.push_back(name_ + ": " + std::to_string(r.folded_faces) + " triangles folded over the deformed base; " +
+                         (d.hierarchy ? "a finer control mesh or the low-pass base keeps them apart"
+                                      : "a smaller detail scale or the volumes encoding keeps them apart"));
 }
 
 void MultiscaleDeformer::do_reset() {

@@ -8,7 +8,6 @@
 
 #include "analysis/self_intersections.h"
 #include "core/errors.h"
-#include "reconstruction/multiscale.h"
 
 namespace msd {
 namespace {
@@ -26,7 +25,7 @@ std::string format(const char* fmt, double x) {
 
 void check_method_names(const std::vector<std::string>& methods) {
   if (methods.empty()) throw InvalidInput("no method to compare");
-  for (const auto& m : methods) make_deformer(m);  // throws for an unknown name, listing the known ones
+  for (const auto& m : methods) builtin_methods().find(m);  // throws for an unknown name, listing the known ones
 }
 
 std::vector<MethodResult> compare_methods(const EditCase& edit, const ComparisonOptions& options) {
@@ -49,7 +48,10 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
     r.method = method;
     r.vertices = static_cast<int>(rest.rows());
     try {
-      auto deformer = make_deformer(method, options.method_options);
+      MethodSettings settings = options.settings;
+      if (settings.decomposition.kind == DecompositionKind::Subdivision && !settings.decomposition.control)
+        settings.decomposition.control = edit.control;
+      auto deformer = builtin_methods().make(method, settings);
       auto t0 = Clock::now();
       deformer->prepare(edit.P, edit.F, edit.region);
       r.prepare_ms = ms_since(t0);
@@ -62,12 +64,11 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
       }
       std::sort(frames.begin(), frames.end());
       r.frame_ms = frames[frames.size() / 2];
-      r.folded_faces = deformer->frame_report().folded_faces;
-      if (const auto* ms = dynamic_cast<const MultiscaleDeformer*>(deformer.get()))
-        r.warning = ms->decomposition_report().warning;
-      if (r.folded_faces > 0)
-        r.warning += (r.warning.empty() ? "" : "; ") + std::to_string(r.folded_faces) +
-                     " triangles folded over the deformed base in the frame";
+      const FrameReport& report = deformer->frame_report();
+      r.folded_faces = report.folded_faces;
+      r.iterations = report.iterations;
+      for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
+        for (const std::string& w : *list) r.warning += (r.warning.empty() ? "" : "; ") + w;
       r.handle_error = handle_error(rest, r.result, edit.region, edit.transforms);
       if (metrics_error) std::rethrow_exception(metrics_error);
       r.rigidity = metrics->rigidity(r.result).stats;

@@ -10,7 +10,7 @@
 
 #include "analysis/metrics.h"
 #include "core/edit_case.h"
-#include "reconstruction/registry.h"
+#include "reconstruction/catalogue.h"
 
 namespace msd {
 
@@ -26,15 +26,16 @@ struct MethodResult {
   Stats distortion;                     //!< detail distortion, relative to the largest detail height
   int self_intersections = -1;          //!< intersecting face pairs (-1: not measured)
   int folded_faces = -1;                //!< the method's own frame check (FrameReport; -1: not measured)
-  std::string warning;                  //!< what the method warned about (decomposition, folded triangles)
+  int iterations = 0;                   //!< iterative methods: iterations of the last frame (FrameReport)
+  std::string warning;                  //!< what the method warned about (prepare and frame warnings)
   std::optional<double> volume_change;  //!< relative, for closed meshes
   Positions result;                     //!< #V by 3 deformed positions
   Eigen::VectorXd distortion_per_vertex;  //!< #V |Δh| in scene units
 };
 
 struct ComparisonOptions {
-  std::vector<std::string> methods = method_names();  //!< registry names (reconstruction/registry.h)
-  MethodOptions method_options;
+  std::vector<std::string> methods = builtin_methods().names();  //!< catalogue names (reconstruction/catalogue.h)
+  MethodSettings settings;  //!< the methods' options (for a subdivision base: the edit case's control mesh by default)
   int timed_frames = 3;            //!< frames timed after one warm-up frame
   bool self_intersections = true;  //!< count intersecting face pairs (CGAL; the costliest metric)
   //! Called with a line of progress (which scene, which method, how long).

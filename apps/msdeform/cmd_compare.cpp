@@ -104,7 +104,7 @@ void add_compare_command(CLI::App& app) {
   auto a = std::make_shared<Args>();
   cmd->add_option("--methods", a->methods, "Methods to run (default: all): " + [] {
     std::string s;
-    for (const auto& n : method_names()) s += (s.empty() ? "" : ",") + n;
+    for (const auto& n : builtin_methods().names()) s += (s.empty() ? "" : ",") + n;
     return s;
   }())->delimiter(',');
   cmd->add_option("--scenes", a->scenes, "Built-in scenes (default: lift,bend120,twist135,bar-lift,bar-bend120,bar-twist135; "
@@ -150,7 +150,7 @@ void add_compare_command(CLI::App& app) {
     std::vector<std::vector<Image>> tiles_by_scene;
     for (const auto& c : cases) {
       std::fprintf(stderr, "%s: %zu vertices, %zu methods\n", c.name.c_str(), size_t(c.P.rows()), options.methods.size());
-      options.method_options = a->method.method_settings(c);
+      options.settings = a->method.method_settings(c);
       std::vector<MethodResult> results = compare_methods(c, options);
       const Positions& rest = c.P;
       const Faces& F = c.F;

@@ -19,7 +19,8 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 std::string fold_advice(const Deformer& deformer) {
   const auto* ms = dynamic_cast<const MultiscaleDeformer*>(&deformer);
   if (!ms) return "the edit is too strong for this method";
-  if (ms->options().decomposition.kind == DecompositionKind::Fairing)
+  const DecompositionKind kind = ms->options().decomposition.kind;
+  if (kind == DecompositionKind::Fairing || kind == DecompositionKind::Subdivision)
     return "use the low-pass base (--base low-pass, the default)";
   const EncodingKind e = ms->options().encoding.kind;
   const std::string smaller = ms->decomposition_report().low_pass.automatic
@@ -57,6 +58,7 @@ void add_deform_command(CLI::App& app) {
     std::printf("  prepare %.1f ms, frame %.2f ms, handle error %.3g\n", prepare_ms, frame_ms, handle_error(rest, out, c.region, c.transforms));
     if (const auto* ms = dynamic_cast<const MultiscaleDeformer*>(deformer.get())) {
       const DecompositionReport& d = ms->decomposition_report();
+      std::printf("  base deformer: %s\n", ms->base_deformer().name().c_str());
       const bool low_pass = d.kind == DecompositionKind::LowPass || d.kind == DecompositionKind::Remeshed;
       if (low_pass && d.low_pass.detail_scale > 0)
         std::printf("  base: low-pass at detail scale %.4g (%s)\n", d.low_pass.detail_scale,
@@ -71,15 +73,18 @@ void add_deform_command(CLI::App& app) {
         std::printf("  base remeshed to edge length %.4g: %d vertices\n", d.remesh_edge_length, d.remeshed_vertices);
       std::printf("  details: max height %.4g, base's smallest curvature radius %.4g, fold ratio %.3g\n",
                   d.check.max_height, d.check.min_curvature_radius, d.check.max_fold_ratio);
-      if (!d.warning.empty()) std::fprintf(stderr, "warning: %s\n", d.warning.c_str());
     }
     const FrameReport& report = deformer->frame_report();
-    if (report.folded_faces >= 0) {
+    if (deformer->traits().solve == DeformerSolve::Iterative)
+      std::printf("  frame: %d iterations, relative residual %.3g%s\n", report.iterations, report.residual,
+                  report.converged ? "" : " (not converged)");
+    if (report.constraint_error >= 0)
+      std::printf("  constraints met in the least-squares sense: largest distance %.3g\n", report.constraint_error);
+    if (report.folded_faces >= 0)
       std::printf("  folded triangles (normal turned against the deformed base's): %d\n", report.folded_faces);
-      if (report.folded_faces > 0)
-        std::fprintf(stderr, "warning: %d triangles of the result folded over the deformed base: %s\n",
-                     report.folded_faces, fold_advice(*deformer).c_str());
-    }
+    for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
+      for (const std::string& w : *list) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    if (report.folded_faces > 0) std::fprintf(stderr, "advice: %s\n", fold_advice(*deformer).c_str());
     for (size_t k = 0; k < c.transforms.size(); ++k) {
       const double det = c.transforms[k].topLeftCorner<3, 3>().determinant();
       if (!(det > 0))

@@ -22,13 +22,6 @@ void require_same_rows(const Positions& A, const Positions& B, const char* who, 
                        " vertices but " + b_name + " has " + std::to_string(B.rows()));
 }
 
-void require_finite(const Positions& P, const char* who, const char* name) {
-  for (Eigen::Index i = 0; i < P.rows(); ++i)
-    if (!P.row(i).allFinite())
-      throw InvalidInput(std::string(who) + ": " + name + " has a non-finite coordinate at vertex " +
-                         std::to_string(i));
-}
-
 // Σ_f p0 · (p1 × p2) / 6 over all faces (the caller checks indices and closedness).
 double signed_volume(const Positions& P, const Faces& F) {
   double six_volume = 0;
@@ -133,7 +126,7 @@ RigidityMetric::RigidityMetric(const Positions& rest, const Faces& F, const Rigi
 RigidityError RigidityMetric::measure(const Positions& deformed) const {
   const char* who = "rigidity_error";
   require_same_rows(rest_, deformed, who, "rest", "deformed");
-  require_finite(deformed, who, "deformed");
+  check_finite(deformed, who, "deformed");
   const int nv = static_cast<int>(rest_.rows());
   const bool cotan_weights = options_.weights == RigidityWeights::Cotan;
 
@@ -293,8 +286,8 @@ ReferenceDistance distance_to_reference(const Positions& P, const Faces& F, cons
     if (F.row(f) != FQ.row(f))
       throw InvalidInput(std::string(who) + ": face " + std::to_string(f) +
                          " differs between the result and the reference; both must share one connectivity");
-  require_finite(P, who, "the result");
-  require_finite(Q, who, "the reference");
+  check_finite(P, who, "the result");
+  check_finite(Q, who, "the reference");
   ReferenceDistance out;
   out.diagonal = bounding_box_diagonal(Q);
   if (!(out.diagonal > 0))

@@ -23,17 +23,8 @@ void check_faces(const Faces& F, Eigen::Index num_vertices, const char* who, con
 }
 
 void check_mesh_arrays(const Positions& P, const Faces& F, const char* who) {
-  const Eigen::Index nv = P.rows();
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k)
-      if (F(f, k) < 0 || F(f, k) >= nv)
-        throw InvalidInput(std::string(who) + ": face " + std::to_string(f) + " has vertex index " +
-                           std::to_string(F(f, k)) + ", outside [0, " + std::to_string(nv) + ")");
-  if (!P.allFinite())
-    for (Eigen::Index v = 0; v < nv; ++v)
-      if (!P.row(v).allFinite())
-        throw InvalidInput(std::string(who) + ": vertex " + std::to_string(v) +
-                           " has a non-finite coordinate");
+  check_faces(F, P.rows(), who, "the mesh");
+  check_finite(P, who, "the mesh");
 }
 
 }  // namespace msd

@@ -10,8 +10,8 @@ namespace msd {
 void check_finite(const Positions& X, const char* who, const char* what);
 //! \throw InvalidInput "<who>: face f of <what> has vertex index i out of range [0, n)" for the first such face.
 void check_faces(const Faces& F, Eigen::Index num_vertices, const char* who, const char* what);
-//! Both for a mesh (P #V×3, F #F×3): \throw InvalidInput, prefixed with `who`, naming the face with an
-//! index outside [0, #V) or the vertex with a non-finite coordinate.
+//! Both for a mesh (P #V×3, F #F×3), the indices first: \throw InvalidInput, prefixed with `who`, naming
+//! the face with an index outside [0, #V) or the vertex with a non-finite coordinate.
 void check_mesh_arrays(const Positions& P, const Faces& F, const char* who);
 
 }  // namespace msd

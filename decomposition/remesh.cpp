@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "core/checks.h"
 #include "core/errors.h"
 
 namespace msd {
@@ -28,9 +29,7 @@ RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_
                        " must be finite and positive");
   if (iterations < 0)
     throw InvalidInput(who + ": iterations " + std::to_string(iterations) + " must be >= 0");
-  for (Eigen::Index v = 0; v < P.rows(); ++v)
-    if (!P.row(v).allFinite())
-      throw InvalidInput(who + ": vertex " + std::to_string(v) + " has a non-finite coordinate");
+  check_finite(P, who.c_str(), "the mesh");
   // Equilateral triangles of the target edge cover the area in about area / (√3/4 · edge²) of them.
   double area = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f)

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/checks.h"
 #include "core/errors.h"
 #include "core/parallel.h"
 
@@ -171,12 +172,7 @@ int ClosestPointQuery::num_faces() const { return impl_ ? static_cast<int>(impl_
 
 void ClosestPointQuery::build(const Positions& P, const Faces& F) {
   if (F.rows() == 0) throw InvalidInput("ClosestPointQuery::build: the mesh has no face");
-  if (!P.allFinite()) {
-    for (Eigen::Index v = 0; v < P.rows(); ++v)
-      if (!P.row(v).allFinite())
-        throw InvalidInput("ClosestPointQuery::build: vertex " + std::to_string(v) +
-                           " has a non-finite coordinate");
-  }
+  check_finite(P, "ClosestPointQuery::build", "the mesh");
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k)
       if (F(f, k) < 0 || F(f, k) >= P.rows())

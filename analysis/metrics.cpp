@@ -22,16 +22,6 @@ void require_same_rows(const Positions& A, const Positions& B, const char* who, 
                        " vertices but " + b_name + " has " + std::to_string(B.rows()));
 }
 
-// Σ_f p0 · (p1 × p2) / 6 over all faces (the caller checks indices and closedness).
-double signed_volume(const Positions& P, const Faces& F) {
-  double six_volume = 0;
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Vec3 a = P.row(F(f, 0)), b = P.row(F(f, 1)), c = P.row(F(f, 2));
-    six_volume += a.dot(b.cross(c));
-  }
-  return six_volume / 6.0;
-}
-
 // Local ARAP step for one vertex: the residual of the best rotation and the normaliser Σ w |e|².
 // for_each(visit) calls visit(j, w_ij) for every weighted neighbour j of i.
 template <class ForEachNeighbour>

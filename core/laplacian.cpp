@@ -185,6 +185,15 @@ double mean_edge_length(const Positions& P, const Faces& F) {
   return sum / (3.0 * static_cast<double>(F.rows()));
 }
 
+double signed_volume(const Positions& P, const Faces& F) {
+  double six_volume = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Vec3 a = P.row(F(f, 0)), b = P.row(F(f, 1)), c = P.row(F(f, 2));
+    six_volume += a.dot(b.cross(c));
+  }
+  return six_volume / 6.0;
+}
+
 SparseMatrix polyharmonic_matrix(const LaplaceOperator& op, int k) {
   if (k < 1 || k > 3)
     throw InvalidInput("polyharmonic_matrix: order " + std::to_string(k) + " (expected 1, 2 or 3)");

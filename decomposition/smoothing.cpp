@@ -20,18 +20,8 @@ Vec3 weighted_centroid(const Positions& P, const Eigen::VectorXd& mass) {
   return (P.transpose() * mass) / mass.sum();
 }
 
-// Signed volume enclosed by a closed, consistently oriented mesh (divergence theorem).
-double enclosed_volume(const Positions& P, const Faces& F) {
-  double v = 0;
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Vec3 a = P.row(F(f, 0)), b = P.row(F(f, 1)), c = P.row(F(f, 2));
-    v += a.dot(b.cross(c));
-  }
-  return v / 6.0;
-}
-
 double measure(const Positions& P, const Faces& F, SmoothingRescale rescale) {
-  return rescale == SmoothingRescale::Area ? face_areas(P, F).sum() : enclosed_volume(P, F);
+  return rescale == SmoothingRescale::Area ? face_areas(P, F).sum() : signed_volume(P, F);
 }
 
 void prepare_step(ConstrainedQuadratic& system, const LaplaceOperator& op, double t,

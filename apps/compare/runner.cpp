@@ -25,11 +25,17 @@ std::string format(const char* fmt, double x) {
 
 void check_method_names(const std::vector<std::string>& methods) {
   if (methods.empty()) throw InvalidInput("no method to compare");
+  for (size_t i = 0; i < methods.size(); ++i)
+    for (size_t j = 0; j < i; ++j)
+      if (methods[i] == methods[j]) throw InvalidInput("method '" + methods[i] + "' is listed twice");
   for (const auto& m : methods) builtin_methods().find(m);  // throws for an unknown name, listing the known ones
 }
 
 std::vector<MethodResult> compare_methods(const EditCase& edit, const ComparisonOptions& options) {
   check_method_names(options.methods);
+  if (!options.reference.empty() &&
+      std::find(options.methods.begin(), options.methods.end(), options.reference) == options.methods.end())
+    throw InvalidInput("the reference method '" + options.reference + "' is not among the compared methods");
   const Positions& rest = edit.P;
   const Faces& F = edit.F;
   // The rest-shape side of the metrics, once for every method. A case they cannot measure (e.g. a region
@@ -88,6 +94,10 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
                              : "FAILED: " + r.error));
     results.push_back(std::move(r));
   }
+  for (const MethodResult& ref : results)
+    if (ref.ok && ref.method == options.reference)
+      for (MethodResult& r : results)
+        if (r.ok) r.reference = distance_to_reference(r.result, F, ref.result, F);
   return results;
 }
 
@@ -122,20 +132,31 @@ std::vector<Column> columns() {
       // Multi-scale methods count the triangles that folded over the deformed base; others do not (n/a).
       {"folded_faces", measured([=](const MethodResult& r) { return count(r.folded_faces); })},
       {"volume_change", measured([=](const MethodResult& r) { return r.volume_change ? g(*r.volume_change) : std::string("n/a"); })},
+      // Distance to the reference method's result (relative to its diagonal), when a reference ran.
+      {"reference_max", measured([=](const MethodResult& r) { return r.reference ? g(r.reference->max) : std::string("n/a"); })},
+      {"reference_mean", measured([=](const MethodResult& r) { return r.reference ? g(r.reference->mean) : std::string("n/a"); })},
       {"message", [](const MethodResult& r) { return r.ok ? r.warning : r.error; }},  // error, or warning
   };
 }
 
 }  // namespace
 
-std::string metrics_csv(const std::vector<MethodResult>& results) {
+std::vector<std::vector<std::string>> metrics_table(const std::vector<MethodResult>& results) {
   const auto cols = columns();
-  std::string out;
-  for (size_t c = 0; c < cols.size(); ++c) out += (c ? "," : "") + std::string(cols[c].name);
-  out += '\n';
+  std::vector<std::vector<std::string>> table(1);
+  for (const auto& c : cols) table[0].push_back(c.name);
   for (const auto& r : results) {
-    for (size_t c = 0; c < cols.size(); ++c) {
-      std::string v = cols[c].value(r);
+    table.emplace_back();
+    for (const auto& c : cols) table.back().push_back(c.value(r));
+  }
+  return table;
+}
+
+std::string metrics_csv(const std::vector<MethodResult>& results) {
+  std::string out;
+  for (const auto& row : metrics_table(results)) {
+    for (size_t c = 0; c < row.size(); ++c) {
+      std::string v = row[c];
       if (v.find_first_of(",\"\n") != std::string::npos) {  // quote per RFC 4180
         std::string q = "\"";
         for (char ch : v) q += ch == '"' ? std::string("\"\"") : std::string(1, ch == '\n' ? ' ' : ch);
@@ -149,21 +170,21 @@ std::string metrics_csv(const std::vector<MethodResult>& results) {
 }
 
 std::string metrics_markdown(const std::vector<MethodResult>& results) {
-  const auto cols = columns();
-  std::string out = "|";
-  for (const auto& c : cols) out += std::string(" ") + c.name + " |";
-  out += "\n|";
-  for (size_t c = 0; c < cols.size(); ++c) out += "---|";
-  out += '\n';
-  for (const auto& r : results) {
+  const auto table = metrics_table(results);
+  std::string out;
+  for (size_t r = 0; r < table.size(); ++r) {
     out += "|";
-    for (const auto& c : cols) {
-      std::string v = c.value(r);
+    for (std::string v : table[r]) {
       for (auto& ch : v)
         if (ch == '|' || ch == '\n') ch = ' ';
       out += " " + v + " |";
     }
     out += '\n';
+    if (r == 0) {
+      out += "|";
+      for (size_t c = 0; c < table[0].size(); ++c) out += "---|";
+      out += '\n';
+    }
   }
   return out;
 }

@@ -29,6 +29,9 @@ struct MethodResult {
   int iterations = 0;                   //!< iterative methods: iterations of the last frame (FrameReport)
   std::string warning;                  //!< what the method warned about (prepare and frame warnings)
   std::optional<double> volume_change;  //!< relative, for closed meshes
+  //! Vertex-to-vertex distance to the reference method's result on the same edit, relative to its
+  //! bounding-box diagonal (ComparisonOptions::reference; empty when there is none).
+  std::optional<ReferenceDistance> reference;
   Positions result;                     //!< #V by 3 deformed positions
   Eigen::VectorXd distortion_per_vertex;  //!< #V |Δh| in scene units
 };
@@ -36,6 +39,9 @@ struct MethodResult {
 struct ComparisonOptions {
   std::vector<std::string> methods = builtin_methods().names();  //!< catalogue names (reconstruction/catalogue.h)
   MethodSettings settings;  //!< the methods' options (for a subdivision base: the edit case's control mesh by default)
+  //! A method of `methods` whose result the others are measured against (seed Fig. 9.16: the nonlinear
+  //! reference); empty: none. \throw InvalidInput from compare_methods() if it is not in `methods`.
+  std::string reference;
   int timed_frames = 3;            //!< frames timed after one warm-up frame
   bool self_intersections = true;  //!< count intersecting face pairs (CGAL; the costliest metric)
   //! Called with a line of progress (which scene, which method, how long).
@@ -50,6 +56,9 @@ void check_method_names(const std::vector<std::string>& methods);
 //! measure, is recorded with ok = false and its message; the others still run.
 std::vector<MethodResult> compare_methods(const EditCase& edit, const ComparisonOptions& options);
 
+//! The results as a table of text cells: the header (column names) first, then one row per result.
+//! Failed runs have empty measured cells (a 0 would read as perfect); unmeasured ones read "n/a".
+std::vector<std::vector<std::string>> metrics_table(const std::vector<MethodResult>& results);
 //! The results as a CSV table (one row per result, a header line first).
 std::string metrics_csv(const std::vector<MethodResult>& results);
 //! The results as a Markdown table.

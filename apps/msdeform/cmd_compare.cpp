@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -42,8 +43,24 @@ void framing_sphere(const Positions& rest, const std::vector<MethodResult>& resu
 
 struct SceneOutput {
   std::string name;
-  std::vector<std::string> images;  // input first, then one per method
+  std::vector<std::string> images;    // input first, then one per method
+  std::vector<std::string> captions;  // the cell's figures under each picture
 };
+
+// The figures of one cell of the matrix (seed Fig. 9.16): rigidity, detail distortion, self-intersecting
+// pairs and the distance to the reference method.
+std::string caption(const MethodResult& r) {
+  if (!r.ok) return "failed";
+  char text[200];
+  std::snprintf(text, sizeof text, "rigidity %.3g, distortion %.3g, pairs %d", r.rigidity.mean, r.distortion.mean,
+                r.self_intersections);
+  std::string out = text;
+  if (r.reference) {
+    std::snprintf(text, sizeof text, ", to reference %.3g", r.reference->max);
+    out += text;
+  }
+  return out;
+}
 
 std::string index_html(const std::vector<MethodResult>& results, const std::vector<SceneOutput>& scenes,
                        const std::vector<std::string>& methods) {
@@ -64,28 +81,20 @@ std::string index_html(const std::vector<MethodResult>& results, const std::vect
   rows.insert(rows.end(), methods.begin(), methods.end());
   for (size_t r = 0; r < rows.size(); ++r) {
     h << "<tr><th>" << html_escape(rows[r]) << "</th>";
-    for (const auto& s : scenes) h << "<td><img src=\"" << html_escape(s.images[r]) << "\" alt=\"\"></td>";
+    for (const auto& s : scenes)
+      h << "<td><img src=\"" << html_escape(s.images[r]) << "\" alt=\"\"><br>" << html_escape(s.captions[r]) << "</td>";
     h << "</tr>\n";
   }
-  h << "</table>\n<h2>Metrics</h2>\n<table><tr>";
-  std::istringstream csv(metrics_csv(results));
-  std::string line;
-  bool header = true;
-  while (std::getline(csv, line)) {
-    if (!header) h << "<tr>";
-    // The table's own CSV: cells hold no commas except in the quoted error column (last).
-    std::string cell;
-    std::istringstream cells(line);
-    int k = 0;
-    while (std::getline(cells, cell, ',') && k < 15) {
-      h << (header ? "<th>" : "<td>") << html_escape(cell) << (header ? "</th>" : "</td>");
-      ++k;
-    }
+  h << "</table>\n<h2>Metrics</h2>\n<table>";
+  const auto table = metrics_table(results);
+  for (size_t r = 0; r < table.size(); ++r) {
+    h << "<tr>";
+    for (const std::string& cell : table[r]) h << (r ? "<td>" : "<th>") << html_escape(cell) << (r ? "</td>" : "</th>");
     h << "</tr>\n";
-    header = false;
   }
   h << "</table>\n<p>rigidity: one-ring rotation residual (0 = locally rigid); distortion: |Δh| / max detail "
-       "height; self_intersections: intersecting face pairs (CGAL).</p>\n</body></html>\n";
+       "height; self_intersections: intersecting face pairs (CGAL); reference_max / reference_mean: vertex distance to "
+       "the reference method's result over its bounding-box diagonal.</p>\n</body></html>\n";
   return h.str();
 }
 
@@ -97,7 +106,7 @@ void add_compare_command(CLI::App& app) {
       "Run every method and detail encoding on the benchmark edits; write metrics, meshes, pictures and index.html");
   struct Args {
     std::vector<std::string> methods, scenes;
-    std::string resolution = "10k", output = "compare-out", mesh, sel, def;
+    std::string resolution = "10k", output = "compare-out", mesh, sel, def, survey, reference;
     bool no_self_intersections = false;
     DeformerOptions method;
   };
@@ -114,6 +123,12 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("--mesh", a->mesh, "Also run a mesh file of your own (needs --sel and --def), e.g. CGAL's cactus");
   cmd->add_option("--sel", a->sel, "Region of --mesh (.sel or .dmat)");
   cmd->add_option("--def", a->def, "Handle transforms of --mesh (.def)");
+  cmd->add_option("--survey", a->survey,
+                  "Also run the Botsch-Sorkine benchmark edits from this folder (seed Fig. 9.16): plane (translation), "
+                  "cylinder (120 degree bend), bar (135 degree twist) and cactus, each NAME.off/.sel/.def");
+  cmd->add_option("--reference", a->reference,
+                  "Method whose result the others are measured against (distance columns; default: the first of "
+                  "primo, arap among the methods run, else none)");
   cmd->add_option("-o,--output", a->output, "Output folder (created; finished files are replaced atomically)")
       ->capture_default_str();
   cmd->add_flag("--no-self-intersections", a->no_self_intersections, "Skip the CGAL self-intersection count");
@@ -125,9 +140,15 @@ void add_compare_command(CLI::App& app) {
     options.self_intersections = !a->no_self_intersections;
     options.progress = [](const std::string& line) { std::fprintf(stderr, "  %s\n", line.c_str()); };
     check_method_names(options.methods);  // fail fast, before any work
+    options.reference = a->reference;
+    if (options.reference.empty())
+      for (const char* candidate : {"primo", "arap"})
+        if (options.reference.empty() &&
+            std::find(options.methods.begin(), options.methods.end(), candidate) != options.methods.end())
+          options.reference = candidate;
     // Build every case first, so a bad name or file fails before anything is written.
     std::vector<std::string> scenes = a->scenes;
-    if (scenes.empty() && a->mesh.empty()) scenes = default_scenes();
+    if (scenes.empty() && a->mesh.empty() && a->survey.empty()) scenes = default_scenes();
     const int resolution = parse_resolution(a->resolution);
     std::vector<EditCase> cases;
     for (const auto& s : scenes) {
@@ -138,6 +159,11 @@ void add_compare_command(CLI::App& app) {
       if (a->sel.empty() || a->def.empty()) throw InvalidInput("compare: --mesh needs --sel and --def");
       cases.push_back(file_case(a->mesh, a->sel, a->def));
     }
+    if (!a->survey.empty())
+      for (const char* name : {"plane", "cylinder", "bar", "cactus"}) {
+        const std::string base = (fs::path(a->survey) / name).string();
+        cases.push_back(file_case(base + ".off", base + ".sel", base + ".def"));
+      }
     const fs::path out(a->output);
     std::error_code ec;
     for (const char* sub : {"images", "meshes"}) fs::create_directories(out / sub, ec);
@@ -162,12 +188,13 @@ void add_compare_command(CLI::App& app) {
       double scalar_max = 0;
       for (const auto& r : results)
         if (r.ok) scalar_max = std::max(scalar_max, robust_scalar_range(r.distortion_per_vertex).second);
-      SceneOutput so{c.name, {}};
+      SceneOutput so{c.name, {}, {}};
       std::vector<Image> column;
       const std::string input_png = "images/" + c.name + "--input.png";
       Image input = render(rest, F, view);
       write_png(input, (out / input_png).string());
       so.images.push_back(input_png);
+      so.captions.push_back(std::to_string(rest.rows()) + " vertices");
       column.push_back(std::move(input));
       for (const auto& r : results) {
         const std::string png = "images/" + c.name + "--" + r.method + ".png";
@@ -191,6 +218,7 @@ void add_compare_command(CLI::App& app) {
           column.push_back(std::move(failed));
         }
         so.images.push_back(png);
+        so.captions.push_back(caption(r));
       }
       std::fprintf(stderr, "  rendered %zu pictures\n", column.size());
       scene_outputs.push_back(so);

@@ -40,6 +40,10 @@ Catalogue make_builtin() {
          [](const MethodSettings& s, const Catalogue&) {
            return std::make_unique<TransformationPropagation>(s.propagation);
          }});
+  c.add({"gradient", "9.4.1", "gradient-based editing: harmonic propagation of the handle gradients, Poisson solve (9.10)",
+         [](const MethodSettings&, const Catalogue&) { return std::make_unique<GradientEditing>(); }});
+  c.add({"laplacian", "9.4.2", "Laplacian editing: implicit linearised similarities per vertex (9.11), factored once",
+         [](const MethodSettings& s, const Catalogue&) { return std::make_unique<LaplacianEditing>(s.laplacian); }});
   for (const std::string& encoding : encoding_names())
     c.add({"multiscale-" + encoding, "9.3",
            "multi-scale: decompose S = B ⊕ D, deform B with the base method, add the " + encoding + " details back",

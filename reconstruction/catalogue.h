@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "deformation/deformer.h"
+#include "deformation/gradient_editing.h"
+#include "deformation/laplacian_editing.h"
 #include "deformation/propagation.h"
 #include "deformation/shell.h"
 #include "reconstruction/multiscale.h"
@@ -20,6 +22,7 @@ namespace msd {
 struct MethodSettings {
   ShellOptions shell;                  //!< shell (and the base of multiscale-* with base_method "shell")
   PropagationOptions propagation;      //!< propagate
+  LaplacianEditingOptions laplacian;   //!< laplacian
   DecompositionOptions decomposition;  //!< multiscale-*: how S is split into B and details
   EncodingOptions encoding;            //!< multiscale-*: the encodings' options (the kind comes from the name)
   //! multiscale-*: the catalogue method that deforms the base (any single-scale row).
@@ -54,7 +57,7 @@ class Catalogue {
   std::vector<MethodEntry> entries_;
 };
 
-//! The built-in methods: "shell", "propagate", then "multiscale-<encoding>" for each detail encoding.
+//! The built-in methods: "shell", "propagate", "gradient", "laplacian", then "multiscale-<encoding>" for each detail encoding.
 const Catalogue& builtin_methods();
 
 }  // namespace msd

@@ -108,6 +108,10 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
                                                      {"smoothstep", PropagationTransfer::SmoothStep}},
           CLI::ignore_case))
       ->default_str("linear");
+  auto* laplacian = cmd.add_option_group("laplacian", "laplacian: Laplacian editing (9.4.2)");
+  laplacian->add_flag("--laplacian-explicit{false}", settings.laplacian.implicit,
+                      "explicit variant: δ'_i = M_i δ_i with M_i propagated from the handles (9.4.3) instead of "
+                      "the implicit linearised similarities (9.11)");
   auto* ms = cmd.add_option_group("multiscale", "multiscale: decompose, deform the base, add the details back (9.3)");
   decomposition.add_to(*ms);
   std::vector<std::string> single_scale;

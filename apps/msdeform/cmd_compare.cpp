@@ -164,6 +164,8 @@ void add_compare_command(CLI::App& app) {
         const std::string base = (fs::path(a->survey) / name).string();
         cases.push_back(file_case(base + ".off", base + ".sel", base + ".def"));
       }
+    std::vector<MethodSettings> settings;  // per case (a subdivision base takes the case's control mesh)
+    for (const auto& c : cases) settings.push_back(a->method.method_settings(c));
     const fs::path out(a->output);
     std::error_code ec;
     for (const char* sub : {"images", "meshes"}) fs::create_directories(out / sub, ec);
@@ -174,9 +176,10 @@ void add_compare_command(CLI::App& app) {
     std::vector<Image> tiles;
     std::vector<std::string> tile_labels;
     std::vector<std::vector<Image>> tiles_by_scene;
-    for (const auto& c : cases) {
+    for (size_t i = 0; i < cases.size(); ++i) {
+      const EditCase& c = cases[i];
       std::fprintf(stderr, "%s: %zu vertices, %zu methods\n", c.name.c_str(), size_t(c.P.rows()), options.methods.size());
-      options.settings = a->method.method_settings(c);
+      options.settings = settings[i];
       std::vector<MethodResult> results = compare_methods(c, options);
       const Positions& rest = c.P;
       const Faces& F = c.F;

@@ -32,7 +32,8 @@ void add_decompose_command(CLI::App& app) {
   decomposition->add_to(*cmd);
   cmd->add_option("-o,--output", *output,
                   "Base mesh to write, .ply: a per-vertex property 'detail' holds the signed normal-displacement "
-                  "height of the detailed vertex (S's connectivity; written atomically)")
+                  "height of the detailed vertex (written atomically); a remeshed base has its own triangles and no "
+                  "'detail' property")
       ->required();
   cmd->callback([=] {
     if (file_extension(*output) != ".ply")

@@ -42,12 +42,12 @@ void DecompositionArgs::add_to(CLI::App& cmd) {
                                                        {"subdivision", DecompositionKind::Subdivision}},
               CLI::ignore_case))
           ->default_str("low-pass");
-  cmd.add_option("--detail-scale", options.low_pass.detail_scale,
+  scale_option = cmd.add_option("--detail-scale", options.low_pass.detail_scale,
                  "low-pass base: features shorter than this length (mesh units) are details; 0 chooses it from the "
                  "detail heights (where they stop growing with the scale; no detail layer: the base is the mesh)")
       ->check(nonnegative_length())
       ->capture_default_str();
-  cmd.add_option("--fairing", fairing_order, "--base fairing: order 1 membrane, 2 thin plate, 3 minimum variation")
+  fairing_option = cmd.add_option("--fairing", fairing_order, "--base fairing: order 1 membrane, 2 thin plate, 3 minimum variation")
       ->check(CLI::Range(1, 3))
       ->capture_default_str();
   remesh_option = cmd.add_option("--remesh-base", options.remesh_edge_length,
@@ -55,6 +55,12 @@ void DecompositionArgs::add_to(CLI::App& cmd) {
                                  "--base remeshed")
                       ->check(nonnegative_length())
                       ->capture_default_str();
+}
+
+bool DecompositionArgs::given() const {
+  for (const CLI::Option* o : {base_option, remesh_option, scale_option, fairing_option})
+    if (o && o->count() > 0) return true;
+  return false;
 }
 
 DecompositionOptions DecompositionArgs::resolve(const EditCase& edit) const {
@@ -117,16 +123,20 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   std::vector<std::string> single_scale;
   for (const auto& n : builtin_methods().names())
     if (n.rfind("multiscale", 0) != 0) single_scale.push_back(n);
-  ms->add_option("--base-method", settings.base_method, "the method that deforms the base: " + joined(single_scale, "|"))
+  base_method_option = ms->add_option("--base-method", settings.base_method, "the method that deforms the base: " + joined(single_scale, "|"))
       ->check(CLI::IsMember(single_scale))
       ->capture_default_str();
 }
 
 std::string DeformerOptions::method_name() const {
+  const bool multiscale = method.rfind("multiscale", 0) == 0;
+  if (!multiscale && (decomposition.given() || (base_method_option && base_method_option->count() > 0)))
+    throw InvalidInput("--base, --detail-scale, --fairing, --remesh-base and --base-method apply to --method "
+                       "multiscale; --method " + method + " has no base to decompose");
   if (method == "multiscale") return "multiscale-" + encoding;
   if (encoding_option && encoding_option->count() > 0)
     throw InvalidInput("--encoding " + encoding + " applies to --method multiscale; --method " + method +
-                       (method.rfind("multiscale-", 0) == 0 ? " names its encoding itself" : " has no detail encoding"));
+                       (multiscale ? " names its encoding itself" : " has no detail encoding"));
   return method;
 }
 

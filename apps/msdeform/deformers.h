@@ -22,6 +22,10 @@ struct DecompositionArgs {
   int fairing_order = 2;
   CLI::Option* base_option = nullptr;
   CLI::Option* remesh_option = nullptr;
+  CLI::Option* scale_option = nullptr;
+  CLI::Option* fairing_option = nullptr;
+  // Whether any of these options was given (they apply to multi-scale methods only).
+  bool given() const;
   void add_to(CLI::App& cmd);
   // The options with the fairing order applied; --remesh-base alone selects the remeshed base. The
   // subdivision base takes the control mesh of the edit (built-in scenes carry one). Throws InvalidInput
@@ -33,6 +37,7 @@ struct DeformerOptions {
   std::string method = "shell";
   std::string encoding = "normal";
   CLI::Option* encoding_option = nullptr;  // set by add_to(): whether --encoding was given
+  CLI::Option* base_method_option = nullptr;
   MethodSettings settings;
   DecompositionArgs decomposition;
   // --method, --encoding and add_settings().
@@ -41,7 +46,8 @@ struct DeformerOptions {
   // runs of several methods.
   void add_settings(CLI::App& cmd);
   // The catalogue name: --method, with "multiscale" completed by --encoding. Throws InvalidInput when
-  // --encoding was given with another method.
+  // --encoding, a decomposition option or --base-method was given with a method that is not multi-scale
+  // (they would be ignored).
   std::string method_name() const;
   // The settings for an edit (the decomposition resolved for it).
   MethodSettings method_settings(const EditCase& edit) const;

@@ -7,10 +7,15 @@ namespace msd::cli {
 
 void EditCaseOptions::add_to(CLI::App& cmd) {
   auto* mesh_opt = cmd.add_option("mesh", mesh, "Mesh file (.off .obj .ply .stl)");
-  cmd.add_option("--sel", sel, "Region: .sel (0 fixed, 1 free, 2+k handle k) or .dmat groups (-1 free, k handle k)");
-  cmd.add_option("--def", def, "Handle transforms: .def, one 4x4 matrix per handle");
-  cmd.add_option("--scene", scene, "Built-in scene instead of files: lift, bend120, twist135, bar-lift, bar-bend120, bar-twist135")
-      ->excludes(mesh_opt);
+  auto* sel_opt =
+      cmd.add_option("--sel", sel, "Region: .sel (0 fixed, 1 free, 2+k handle k) or .dmat groups (-1 free, k handle k)");
+  auto* def_opt = cmd.add_option("--def", def, "Handle transforms: .def, one 4x4 matrix per handle");
+  // A scene brings its own region and transforms: files given with it would be silently ignored.
+  cmd.add_option("--scene", scene, "Built-in scene instead of files (it has its own region and transforms): lift, "
+                                   "bend120, twist135, bar-lift, bar-bend120, bar-twist135")
+      ->excludes(mesh_opt)
+      ->excludes(sel_opt)
+      ->excludes(def_opt);
   cmd.add_option("--resolution", resolution, "Approximate vertex count of a built-in scene (e.g. 10k, 100k, 1M)")
       ->capture_default_str();
 }

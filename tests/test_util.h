@@ -12,6 +12,7 @@
 #include <catch2/catch.hpp>
 
 #include "core/mesh.h"
+#include "core/region.h"
 
 namespace msd::test {
 
@@ -41,6 +42,18 @@ struct TempDir {
 inline double max_row_distance(const Positions& A, const Positions& B) {
   REQUIRE(A.rows() == B.rows());
   return (A - B).rowwise().norm().maxCoeff();
+}
+
+//! Max over the constrained vertices of |p' − T_k p| (fixed vertices: T = I), in mesh units.
+inline double constraint_error(const Positions& rest, const Positions& out, const Region& region,
+                               const std::vector<Mat4>& T) {
+  double err = 0;
+  for (int v : region.constrained_vertices()) {
+    const int k = region.handle_of(v);
+    const Vec3 target = k < 0 ? Vec3(rest.row(v)) : transform_point(T[k], rest.row(v));
+    err = std::max(err, (Vec3(out.row(v)) - target).norm());
+  }
+  return err;
 }
 
 //! P (#V by 3) moved by x -> R x + t.

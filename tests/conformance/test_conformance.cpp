@@ -73,17 +73,6 @@ Mat4 rigid() {
   return T;
 }
 
-double max_constraint_error(const Positions& rest, const Positions& out, const Region& region,
-                            const std::vector<Mat4>& transforms) {
-  double e = 0;
-  for (int v : region.constrained_vertices()) {
-    const int k = region.handle_of(v);
-    const Vec3 target = k < 0 ? Vec3(rest.row(v)) : transform_point(transforms[k], rest.row(v));
-    e = std::max(e, (Vec3(out.row(v)) - target).norm());
-  }
-  return e;
-}
-
 // Runs f on every catalogue row with a fresh deformer, as a Catch2 section per method.
 template <class F>
 void for_every_method(F&& f) {
@@ -106,7 +95,7 @@ TEST_CASE("conformance: constraints, frame report and reset", "[conformance]") {
     REQUIRE(first.rows() == s.P.rows());
     REQUIRE(first.allFinite());
     const FrameReport& r = d.frame_report();
-    const double error = max_constraint_error(s.P, first, s.region, s.transforms);
+    const double error = test::constraint_error(s.P, first, s.region, s.transforms);
     if (t.exact_constraints) {
       CHECK(error <= 1e-9 * diag);
     } else {

@@ -8,21 +8,16 @@
 #include "core/edit_case.h"
 #include "core/mesh.h"
 #include "core/region.h"
+#include "core/scenes.h"
 #include "test_util.h"
 
 namespace msd::test {
 
-// Max over constrained vertices of |p' − T p| (fixed: T = I).
-inline double constraint_error(const Positions& rest, const Positions& out, const Region& region,
-                               const std::vector<Mat4>& T) {
-  double err = 0;
-  for (int v = 0; v < region.num_vertices(); ++v) {
-    if (region.is_free(v)) continue;
-    const int k = region.handle_of(v);
-    const Vec3 target = k < 0 ? Vec3(rest.row(v)) : transform_point(T[k], rest.row(v));
-    err = std::max(err, (Vec3(out.row(v)) - target).norm());
-  }
-  return err;
+// A generated scene of about 3000 vertices.
+inline Scene small_scene(const std::string& name) {
+  SceneOptions o;
+  o.resolution = 3000;
+  return make_scene(name, o);
 }
 
 inline EditCase survey_case(const std::string& name) {

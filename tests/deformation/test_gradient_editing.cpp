@@ -12,15 +12,10 @@
 using namespace msd;
 
 namespace {
-Scene small_scene(const std::string& name) {
-  SceneOptions o;
-  o.resolution = 3000;
-  return make_scene(name, o);
-}
 }  // namespace
 
 TEST_CASE("gradient: identity frame is the rest shape and constraints are exact", "[deformation][gradient]") {
-  const Scene s = small_scene("bend120");
+  const Scene s = test::small_scene("bend120");
   const double diag = bounding_box_diagonal(s.P);
   GradientEditing g;
   g.prepare(s.P, s.F, s.region);
@@ -32,7 +27,7 @@ TEST_CASE("gradient: identity frame is the rest shape and constraints are exact"
 
 TEST_CASE("gradient: the weights are propagation_field's harmonic fields and the frame solves (9.10)",
           "[deformation][gradient]") {
-  const Scene s = small_scene("twist135");
+  const Scene s = test::small_scene("twist135");
   const double diag = bounding_box_diagonal(s.P);
   GradientEditing g;
   g.prepare(s.P, s.F, s.region);
@@ -65,7 +60,7 @@ TEST_CASE("gradient: the weights are propagation_field's harmonic fields and the
 
 TEST_CASE("gradient: one rigid motion of several handles with weights summing to 1 moves the shape rigidly",
           "[deformation][gradient]") {
-  const Scene s = small_scene("bar-bend120");
+  const Scene s = test::small_scene("bar-bend120");
   std::vector<int> codes = s.region.codes();
   for (int& c : codes)
     if (c == Region::kFixed) c = Region::kFirstHandle + 1;  // the fixed ring becomes handle 1
@@ -85,7 +80,7 @@ TEST_CASE("gradient: a translated handle changes no gradient, so the free region
           "[deformation][gradient]") {
   // Seed 9.4.3 and 9.7: translation insensitivity. J' = J, so the result is the harmonic displacement
   // (shell with ks = 1, kb = 0), C⁰ at the region's boundary, against shell's C¹ bending.
-  const Scene s = small_scene("lift");
+  const Scene s = test::small_scene("lift");
   GradientEditing g;
   g.prepare(s.P, s.F, s.region);
   const Positions out = g.deform(s.transforms);

@@ -9,11 +9,6 @@
 using namespace msd;
 
 namespace {
-Scene small_scene(const std::string& name) {
-  SceneOptions o;
-  o.resolution = 3000;
-  return make_scene(name, o);
-}
 Mat4 rotation(double angle, const Vec3& axis, const Vec3& t = Vec3::Zero()) {
   Mat4 T = Mat4::Identity();
   T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
@@ -23,7 +18,7 @@ Mat4 rotation(double angle, const Vec3& axis, const Vec3& t = Vec3::Zero()) {
 }  // namespace
 
 TEST_CASE("laplacian: identity frame is the rest shape and constraints are exact", "[deformation][laplacian]") {
-  const Scene s = small_scene("bend120");
+  const Scene s = test::small_scene("bend120");
   const double diag = bounding_box_diagonal(s.P);
   for (bool implicit : {true, false}) {
     INFO("implicit " << implicit);
@@ -38,7 +33,7 @@ TEST_CASE("laplacian: identity frame is the rest shape and constraints are exact
 
 TEST_CASE("laplacian: linearised rotations are not rigid (implicit), propagated ones are (explicit)",
           "[deformation][laplacian]") {
-  const Scene s = small_scene("bar-bend120");
+  const Scene s = test::small_scene("bar-bend120");
   std::vector<int> codes = s.region.codes();
   for (int& c : codes)
     if (c != Region::kFree) c = Region::kFirstHandle;
@@ -65,7 +60,7 @@ TEST_CASE("laplacian: linearised rotations are not rigid (implicit), propagated 
 TEST_CASE("laplacian: the explicit variant is translation-insensitive (shell's bending under a lift)",
           "[deformation][laplacian]") {
   // δ' = δ for a translated handle, so Δ²p' = Δδ is the shell equation Δ²d = 0 (seed 9.4.2).
-  const Scene s = small_scene("lift");
+  const Scene s = test::small_scene("lift");
   LaplacianEditing l(LaplacianEditingOptions{false});
   ShellDeformer shell(ShellOptions{0, 1});
   l.prepare(s.P, s.F, s.region);

@@ -35,18 +35,6 @@ Scene small_scene(const std::string& name, double bump_height = 0.05) {
   return make_scene(name, o);
 }
 
-// Max over constrained vertices of |p' − T p| (fixed: T = I).
-double constraint_error(const Positions& rest, const Positions& out, const Region& region, const std::vector<Mat4>& T) {
-  double err = 0;
-  for (int v = 0; v < region.num_vertices(); ++v) {
-    if (region.is_free(v)) continue;
-    const int k = region.handle_of(v);
-    const Vec3 target = k < 0 ? Vec3(rest.row(v)) : transform_point(T[k], rest.row(v));
-    err = std::max(err, (Vec3(out.row(v)) - target).norm());
-  }
-  return err;
-}
-
 // Angle between the normals of the two faces of each interior edge, after minus before.
 std::vector<std::pair<Vec3, double>> dihedral_change(const Mesh& mesh, const Positions& before, const Positions& after) {
   auto normal = [&](const Positions& P, Mesh::FaceHandle f) {
@@ -96,7 +84,7 @@ TEST_CASE("shell: the result solves (9.6) at free vertices and meets every const
     double worst = 0;
     for (int v : s.region.free_vertices()) worst = std::max(worst, residual.row(v).norm());
     CHECK(worst <= 1e-9 * scale);
-    CHECK(constraint_error(s.P, out, s.region, s.transforms) <= 1e-12);
+    CHECK(test::constraint_error(s.P, out, s.region, s.transforms) <= 1e-12);
   }
 }
 

@@ -37,6 +37,33 @@ void LaplacianEditing::do_prepare(const Positions& P, const Faces& F, const Regi
     prepare_implicit(P, F, region);
   else
     prepare_explicit(P, F, region);
+  const VertexAdjacency adjacency = vertex_adjacency(F, static_cast<int>(P.rows()));
+  free_edges_.clear();
+  free_edge_length_.clear();
+  for (int i = 0; i < adjacency.num_vertices(); ++i)
+    for (const int* j = adjacency.begin(i); j != adjacency.end(i); ++j) {
+      const double length = (P.row(i) - P.row(*j)).norm();
+      if (i < *j && (region.is_free(i) || region.is_free(*j)) && length > 0) {
+        free_edges_.emplace_back(i, *j);
+        free_edge_length_.push_back(length);
+      }
+    }
+}
+
+void LaplacianEditing::check_scale(const Positions& out) {
+  if (free_edges_.empty()) return;
+  double sum = 0;  // Σ |log(ℓ'/ℓ)|; a collapsed edge counts as infinitely scaled
+  for (size_t e = 0; e < free_edges_.size(); ++e)
+    sum += std::abs(std::log((out.row(free_edges_[e].first) - out.row(free_edges_[e].second)).norm() /
+                             free_edge_length_[e]));
+  const double scale = std::exp(sum / static_cast<double>(free_edges_.size()));
+  if (!(scale <= kMaxMeanScale))
+    frame_report_.warnings.push_back(
+        name_ + ": the edges around the free vertices changed length by a factor " + std::to_string(scale) +
+        " on average (grown or shrunk): " +
+        (options_.implicit ? "the linearised rotations of implicit Laplacian editing scale the surface under large "
+                             "rotations (seed 9.4.2); use gradient, multiscale or the explicit variant"
+                           : "the edit stretches the free region"));
 }
 
 void LaplacianEditing::prepare_implicit(const Positions& P, const Faces& F, const Region&) {
@@ -143,6 +170,7 @@ void LaplacianEditing::do_deform(const std::vector<Mat4>& transforms, Positions&
     parallel_for_chunks(static_cast<long>(unknown.size()), [&](long b, long e) {
       for (long u = b; u < e; ++u) out(unknown[u] / 3, unknown[u] % 3) = x(u, 0);
     });
+    check_scale(out);
     return;
   }
   // Explicit: δ'_i = M_i δ_i, right-hand side (W δ')_u on the unknown rows.
@@ -164,6 +192,7 @@ void LaplacianEditing::do_deform(const std::vector<Mat4>& transforms, Positions&
   parallel_for_chunks(static_cast<long>(unknown.size()), [&](long b, long e) {
     for (long u = b; u < e; ++u) out.row(unknown[u]) = x.row(u);
   });
+  check_scale(out);
 }
 
 }  // namespace msd

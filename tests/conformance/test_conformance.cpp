@@ -110,7 +110,9 @@ TEST_CASE("conformance: constraints, frame report and reset", "[conformance]") {
     }
     if (d.name().rfind("multiscale", 0) == 0) CHECK(r.folded_faces >= 0);
     CHECK(r.converged);
-    CHECK(r.warnings.empty() == (r.converged && r.folded_faces <= 0));
+    // A frame that did not converge or folded triangles says so (other checks may warn too, e.g. the
+    // Laplacian's scale check); an identity frame below warns about nothing.
+    if (!r.converged || r.folded_faces > 0) CHECK_FALSE(r.warnings.empty());
     // reset() returns to rest: the next frame is the first one again (iterative: to its tolerance).
     d.reset();
     const Positions again = d.deform(s.transforms);
@@ -118,6 +120,7 @@ TEST_CASE("conformance: constraints, frame report and reset", "[conformance]") {
     // The identity moves nothing.
     d.reset();
     CHECK(test::max_row_distance(d.deform({Mat4::Identity()}), s.P) <= 1e-6 * diag);
+    CHECK(d.frame_report().warnings.empty());
   });
 }
 

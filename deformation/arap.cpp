@@ -1,0 +1,416 @@
+#include "deformation/arap.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "core/errors.h"
+#include "core/laplacian.h"
+#include "core/parallel.h"
+#include "core/rotation.h"
+
+namespace msd {
+namespace {
+
+constexpr long kGrain = 2048;
+// Newton steps of the rotation fit before it falls back to the SVD; the fit has converged once a step
+// turns the rotation by less than kFitAngle (radians).
+constexpr int kFitIterations = 6;
+constexpr double kFitAngle = 1e-10;
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// tr(Rᵀ A).
+double alignment(const Mat3& R, const Mat3& A) { return R.cwiseProduct(A).sum(); }
+
+}  // namespace
+
+const char* to_string(ArapEnergy energy) {
+  return energy == ArapEnergy::Spokes ? "spokes" : "spokes-and-rims";
+}
+
+ArapDeformer::ArapDeformer(ArapOptions options) : options_(options) {
+  if (options_.max_iterations < 1)
+    throw InvalidInput("arap: max_iterations must be at least 1 (got " + std::to_string(options_.max_iterations) + ")");
+  if (!(options_.tolerance >= 0) || !std::isfinite(options_.tolerance))
+    throw InvalidInput("arap: tolerance must be finite and >= 0 (got " + std::to_string(options_.tolerance) + ")");
+  if (!(options_.min_weight_ratio > 0 && options_.min_weight_ratio <= 1))
+    throw InvalidInput("arap: min_weight_ratio must lie in (0, 1] (got " + std::to_string(options_.min_weight_ratio) +
+                       ")");
+}
+
+DeformerTraits ArapDeformer::traits() const {
+  DeformerTraits t;
+  t.solve = DeformerSolve::Iterative;
+  t.vertex_targets = true;
+  t.initial_guess = true;
+  t.exact_constraints = true;
+  t.reproduces_rigid_motions = true;
+  return t;
+}
+
+void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& region) {
+  rest_ = P;
+  nv_ = static_cast<int>(P.rows());
+  const long nf = F.rows();
+  const bool spokes = options_.energy == ArapEnergy::Spokes;
+
+  // Half cotangents c_k of every face (edge opposite corner k), jointly scaled for needles as
+  // cotan_laplacian() does; degenerate faces weigh 0 (then get the floor below).
+  std::vector<double> half_cot(3 * nf);
+  parallel_for_chunks(nf, [&](long b, long e) {
+    for (long f = b; f < e; ++f) {
+      const TriangleCotangents t = triangle_cotangents(P.row(F(f, 0)), P.row(F(f, 1)), P.row(F(f, 2)));
+      for (int k = 0; k < 3; ++k) half_cot[3 * f + k] = t.degenerate ? 0.0 : 0.5 * t.weight[k];
+    }
+  });
+
+  std::vector<Triplet> triplets;
+  triplets.reserve(6 * nf);
+  clamped_weights_ = 0;
+  if (spokes) {
+    // Edge weights w_ij = Σ over the edge's faces of c; clamped per edge.
+    for (long f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int a = F(f, (k + 1) % 3), b = F(f, (k + 2) % 3);
+        triplets.emplace_back(a, b, half_cot[3 * f + k]);
+        triplets.emplace_back(b, a, half_cot[3 * f + k]);
+      }
+    SparseMatrix W(nv_, nv_);
+    W.setFromTriplets(triplets.begin(), triplets.end());
+    double sum = 0;
+    long count = 0;
+    for (int j = 0; j < W.outerSize(); ++j)
+      for (SparseMatrix::InnerIterator it(W, j); it; ++it)
+        if (it.value() > 0) sum += it.value(), ++count;
+    const double floor = options_.min_weight_ratio * (count ? sum / count : 1.0);
+    ring_offsets_.assign(nv_ + 1, 0);
+    ring_.clear();
+    ring_weight_.clear();
+    ring_edge_.clear();
+    ring_.reserve(W.nonZeros());
+    ring_weight_.reserve(W.nonZeros());
+    ring_edge_.reserve(3 * W.nonZeros());
+    cell_sum_.assign(3 * nv_, 0.0);
+    cell_rest_.assign(nv_, 0.0);
+    triplets.clear();
+    for (int i = 0; i < nv_; ++i) {  // W is symmetric: column i lists the neighbours of i
+      double diagonal = 0;
+      for (SparseMatrix::InnerIterator it(W, i); it; ++it) {
+        const int j = static_cast<int>(it.row());
+        if (j == i) continue;
+        double w = it.value();
+        if (w < floor) {
+          w = floor;
+          if (j > i) ++clamped_weights_;
+        }
+        const Vec3 e = P.row(i) - P.row(j);
+        ring_.push_back(j);
+        ring_weight_.push_back(w);
+        for (int d = 0; d < 3; ++d) {
+          ring_edge_.push_back(w * e[d]);
+          cell_sum_[3 * i + d] += w * e[d];
+        }
+        cell_rest_[i] += w * e.squaredNorm();
+        triplets.emplace_back(i, j, -w);
+        diagonal += w;
+      }
+      triplets.emplace_back(i, i, diagonal);
+      ring_offsets_[i + 1] = static_cast<int>(ring_.size());
+    }
+  } else {
+    // Spokes and rims: one weight per face corner (its opposite edge in that face), clamped per corner.
+    double sum = 0;
+    long count = 0;
+    for (double c : half_cot)
+      if (c > 0) sum += c, ++count;
+    const double floor = options_.min_weight_ratio * (count ? sum / count : 1.0);
+    face_vertex_.assign(F.data(), F.data() + 3 * nf);
+    face_weight_.assign(3 * nf, 0.0);
+    face_edge_.assign(9 * nf, 0.0);
+    face_corner_.assign(9 * nf, 0.0);
+    face_buffer_.assign(9 * nf, 0.0);
+    face_dsq_.assign(nf, 0.0);
+    cell_rest_.assign(nv_, 0.0);
+    std::vector<double> face_rest(nf, 0.0);
+    for (long f = 0; f < nf; ++f) {
+      double c[3];
+      for (int k = 0; k < 3; ++k) {
+        c[k] = half_cot[3 * f + k];
+        if (c[k] < floor) c[k] = floor, ++clamped_weights_;
+        face_weight_[3 * f + k] = c[k];
+      }
+      for (int k = 0; k < 3; ++k) {
+        const int v = F(f, k), a = F(f, (k + 1) % 3), b = F(f, (k + 2) % 3);
+        const Vec3 e = P.row(a) - P.row(b);  // edge opposite corner k
+        for (int d = 0; d < 3; ++d) face_edge_[9 * f + 3 * k + d] = c[k] * e[d];
+        face_rest[f] += c[k] * e.squaredNorm();
+        // s_k = c_(k+1) (p_k − p_(k+2)) + c_(k+2) (p_k − p_(k+1)): the corner's two edges.
+        const Vec3 s = c[(k + 1) % 3] * (P.row(v) - P.row(b)) + c[(k + 2) % 3] * (P.row(v) - P.row(a));
+        for (int d = 0; d < 3; ++d) face_corner_[9 * f + 3 * k + d] = s[d];
+        triplets.emplace_back(a, b, -c[k]);
+        triplets.emplace_back(b, a, -c[k]);
+        triplets.emplace_back(a, a, c[k]);
+        triplets.emplace_back(b, b, c[k]);
+      }
+    }
+    // (face, corner) pairs around each vertex.
+    corner_offsets_.assign(nv_ + 1, 0);
+    for (long f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) ++corner_offsets_[F(f, k) + 1];
+    for (int i = 0; i < nv_; ++i) corner_offsets_[i + 1] += corner_offsets_[i];
+    corners_.assign(corner_offsets_[nv_], 0);
+    std::vector<int> fill(corner_offsets_.begin(), corner_offsets_.end() - 1);
+    for (long f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        corners_[fill[F(f, k)]++] = static_cast<int>(3 * f + k);
+        cell_rest_[F(f, k)] += face_rest[f];
+      }
+  }
+
+  SparseMatrix L(nv_, nv_);
+  L.setFromTriplets(triplets.begin(), triplets.end());
+  triplets = {};
+  constrained_ = region.constrained_vertices();
+  handle_of_constrained_.clear();
+  for (int v : constrained_) handle_of_constrained_.push_back(region.handle_of(v));
+  try {
+    system_.prepare(L, constrained_);
+  } catch (const SolverError& e) {
+    throw SolverError("arap: the global system is singular near vertex " + std::to_string(e.index()) +
+                          " (a free part of the mesh without a fixed or handle vertex, or a vertex without faces)",
+                      e.index());
+  }
+  unknown_ = system_.unknown();
+  rest_energy_scale_ = 0;
+  for (double r : cell_rest_) rest_energy_scale_ += r;
+
+  // Iteration state and buffers, sized once.
+  x_ = rest_;
+  rotation_.assign(nv_, Mat3::Identity());
+  quaternion_.assign(nv_, Eigen::Vector4d(0, 0, 0, 1));
+  vertex_energy_.assign(nv_, 0.0);
+  rhs_known_.resize(unknown_.size(), 3);
+  rhs_.resize(unknown_.size(), 3);
+  x_unknown_.resize(unknown_.size(), 3);
+  targets_.resize(constrained_.size(), 3);
+  energies_.clear();
+  energies_.reserve(options_.max_iterations + 1);
+}
+
+void ArapDeformer::fit_rotation(long i, const Mat3& A) {
+  const Mat3 R0 = rotation_[i];
+  const double f0 = alignment(R0, A);
+  const double scale = A.norm();
+  if (!(scale > 0)) return;  // an empty cell: every rotation fits; keep the last one
+  Eigen::Quaterniond q(quaternion_[i][3], quaternion_[i][0], quaternion_[i][1], quaternion_[i][2]);
+  Mat3 R = R0;
+  double step2 = std::numeric_limits<double>::infinity();
+  for (int it = 0; it < kFitIterations && step2 > kFitAngle * kFitAngle; ++it) {
+    // Newton step on f(δ) = tr((R exp[δ]×)ᵀ A) in the body frame: with M = Rᵀ A, gradient 2m
+    // (skew(M) = [m]×) and Hessian −(tr M · I − sym M); far from the optimum (Hessian not negative
+    // definite) a gradient step scaled by tr M as in Müller et al. 2016.
+    const Mat3 M = R.transpose() * A;
+    const Vec3 g(M(2, 1) - M(1, 2), M(0, 2) - M(2, 0), M(1, 0) - M(0, 1));
+    const double trace = M.trace();
+    const Mat3 K = trace * Mat3::Identity() - 0.5 * (M + M.transpose());
+    Vec3 delta;
+    Eigen::LLT<Mat3> llt(K);
+    const bool newton = trace > 0 && llt.info() == Eigen::Success;
+    if (newton) {
+      delta = llt.solve(g);
+    } else {
+      delta = g / (std::abs(trace) + 1e-12 * scale);
+    }
+    step2 = delta.squaredNorm();
+    if (!std::isfinite(step2)) break;
+    // Newton converges quadratically: after a step of δ the error is O(|δ|²), below kFitAngle once
+    // |δ|² is; a gradient step needs the step itself below kFitAngle.
+    if (newton && step2 < kFitAngle) step2 = 0;
+    // Right-multiply by the Cayley rotation (1, δ/2): by 2·atan(|δ|/2) about δ.
+    q = q * Eigen::Quaterniond(1.0, 0.5 * delta.x(), 0.5 * delta.y(), 0.5 * delta.z());
+    q.normalize();
+    R = q.toRotationMatrix();
+  }
+  if (!(step2 <= 1e-12)) {  // not converged (or not finite): the exact fit
+    R = best_rotation(A.transpose());
+    q = Eigen::Quaterniond(R);
+  }
+  if (alignment(R, A) < f0) return;  // never worse than the last rotation: E stays non-increasing
+  rotation_[i] = R;
+  quaternion_[i] = q.coeffs();
+}
+
+double ArapDeformer::local_step() {
+  const auto t0 = std::chrono::steady_clock::now();
+  const double* x = x_.data();
+  if (options_.energy == ArapEnergy::Spokes) {
+    parallel_for_chunks(nv_, [&](long b, long e) {
+      for (long i = b; i < e; ++i) {
+        const double xi0 = x[3 * i], xi1 = x[3 * i + 1], xi2 = x[3 * i + 2];
+        double a00 = 0, a01 = 0, a02 = 0, a10 = 0, a11 = 0, a12 = 0, a20 = 0, a21 = 0, a22 = 0, dsq = 0;
+        for (int h = ring_offsets_[i]; h < ring_offsets_[i + 1]; ++h) {
+          const double* xj = x + 3 * static_cast<long>(ring_[h]);
+          const double* we = ring_edge_.data() + 3 * static_cast<long>(h);
+          const double d0 = xi0 - xj[0], d1 = xi1 - xj[1], d2 = xi2 - xj[2];
+          a00 += d0 * we[0], a01 += d0 * we[1], a02 += d0 * we[2];
+          a10 += d1 * we[0], a11 += d1 * we[1], a12 += d1 * we[2];
+          a20 += d2 * we[0], a21 += d2 * we[1], a22 += d2 * we[2];
+          dsq += ring_weight_[h] * (d0 * d0 + d1 * d1 + d2 * d2);
+        }
+        Mat3 A;
+        A << a00, a01, a02, a10, a11, a12, a20, a21, a22;  // Σ_j w_ij d_ij e_ijᵀ
+        fit_rotation(i, A);
+        vertex_energy_[i] = dsq + cell_rest_[i] - 2 * alignment(rotation_[i], A);
+      }
+    }, kGrain);
+  } else {
+    // Per face: C_t = Σ_k c_k d_k e_kᵀ and Σ_k c_k |d_k|² (d_k the deformed edge opposite corner k), then
+    // per vertex the sums over its faces.
+    const long nf = static_cast<long>(face_dsq_.size());
+    parallel_for_chunks(nf, [&](long b, long e) {
+      for (long f = b; f < e; ++f) {
+        const int* v = face_vertex_.data() + 3 * f;
+        Mat3 C = Mat3::Zero();
+        double dsq = 0;
+        for (int k = 0; k < 3; ++k) {
+          const double* xa = x + 3 * static_cast<long>(v[(k + 1) % 3]);
+          const double* xb = x + 3 * static_cast<long>(v[(k + 2) % 3]);
+          const Vec3 d(xa[0] - xb[0], xa[1] - xb[1], xa[2] - xb[2]);
+          const Eigen::Map<const Vec3> ce(face_edge_.data() + 9 * f + 3 * k);
+          C.noalias() += d * ce.transpose();
+          dsq += face_weight_[3 * f + k] * d.squaredNorm();
+        }
+        Eigen::Map<Mat3>(face_buffer_.data() + 9 * f) = C;
+        face_dsq_[f] = dsq;
+      }
+    }, kGrain);
+    parallel_for_chunks(nv_, [&](long b, long e) {
+      for (long i = b; i < e; ++i) {
+        Mat3 A = Mat3::Zero();
+        double dsq = 0;
+        for (int c = corner_offsets_[i]; c < corner_offsets_[i + 1]; ++c) {
+          const long f = corners_[c] / 3;
+          A += Eigen::Map<const Mat3>(face_buffer_.data() + 9 * f);
+          dsq += face_dsq_[f];
+        }
+        fit_rotation(i, A);
+        vertex_energy_[i] = dsq + cell_rest_[i] - 2 * alignment(rotation_[i], A);
+      }
+    }, kGrain);
+  }
+  double energy = 0;
+  for (double e : vertex_energy_) energy += e;
+  local_seconds_ += seconds_since(t0);
+  return std::max(energy, 0.0);
+}
+
+void ArapDeformer::global_step() {
+  const auto t0 = std::chrono::steady_clock::now();
+  const long nu = static_cast<long>(unknown_.size());
+  if (nu == 0) return;
+  const double* known = rhs_known_.data();
+  double* rhs = rhs_.data();
+  if (options_.energy == ArapEnergy::Spokes) {
+    // b_i = Σ_j w_ij/2 (R_i + R_j)(p_i − p_j) = ½ R_i Σ_j w_ij e_ij + ½ Σ_j R_j w_ij e_ij.
+    parallel_for_chunks(nu, [&](long b, long e) {
+      for (long u = b; u < e; ++u) {
+        const int i = unknown_[u];
+        Vec3 s = rotation_[i] * Eigen::Map<const Vec3>(cell_sum_.data() + 3 * static_cast<long>(i));
+        for (int h = ring_offsets_[i]; h < ring_offsets_[i + 1]; ++h)
+          s.noalias() += rotation_[ring_[h]] * Eigen::Map<const Vec3>(ring_edge_.data() + 3 * static_cast<long>(h));
+        for (int d = 0; d < 3; ++d) rhs[d * nu + u] = known[d * nu + u] + 0.5 * s[d];
+      }
+    }, kGrain);
+  } else {
+    // Per face (R_a + R_b + R_c)/3, then b_i = Σ over i's corners of that times s_corner.
+    const long nf = static_cast<long>(face_dsq_.size());
+    parallel_for_chunks(nf, [&](long b, long e) {
+      for (long f = b; f < e; ++f) {
+        const int* v = face_vertex_.data() + 3 * f;
+        Eigen::Map<Mat3>(face_buffer_.data() + 9 * f) = (rotation_[v[0]] + rotation_[v[1]] + rotation_[v[2]]) / 3.0;
+      }
+    }, kGrain);
+    parallel_for_chunks(nu, [&](long b, long e) {
+      for (long u = b; u < e; ++u) {
+        const int i = unknown_[u];
+        Vec3 s = Vec3::Zero();
+        for (int c = corner_offsets_[i]; c < corner_offsets_[i + 1]; ++c) {
+          const long fc = corners_[c];
+          s.noalias() += Eigen::Map<const Mat3>(face_buffer_.data() + 9 * (fc / 3)) *
+                         Eigen::Map<const Vec3>(face_corner_.data() + 3 * fc);
+        }
+        for (int d = 0; d < 3; ++d) rhs[d * nu + u] = known[d * nu + u] + s[d];
+      }
+    }, kGrain);
+  }
+  system_.solver().solve(rhs_, x_unknown_);  // one back-substitution, three columns
+  const double* xu = x_unknown_.data();
+  double* x = x_.data();
+  parallel_for_chunks(nu, [&](long b, long e) {
+    for (long u = b; u < e; ++u)
+      for (int d = 0; d < 3; ++d) x[3 * static_cast<long>(unknown_[u]) + d] = xu[d * nu + u];
+  }, 1 << 14);
+  global_seconds_ += seconds_since(t0);
+}
+
+void ArapDeformer::run(const Positions& targets, Positions& out) {
+  local_seconds_ = global_seconds_ = 0;
+  for (size_t c = 0; c < constrained_.size(); ++c) x_.row(constrained_[c]) = targets.row(c);
+  // The constrained part of the global step's right-hand side, fixed for the frame: −Q_uk x_k.
+  if (!unknown_.empty()) {
+    rhs_known_.noalias() = system_.coupling() * targets;
+    rhs_known_ *= -1.0;
+  }
+  energies_.clear();
+  const double tol = options_.tolerance;
+  // Energies at or below this are round-off of a rigid solution (E is evaluated as a difference of
+  // sums of the size of the rest energy).
+  const double negligible = 1e-13 * rest_energy_scale_;
+  double energy = local_step(), change = 1;
+  energies_.push_back(energy);
+  int iterations = 0;
+  bool converged = tol > 0 && energy <= negligible;
+  if (converged) change = 0;
+  while (!converged && iterations < options_.max_iterations) {
+    global_step();
+    ++iterations;
+    const double previous = energy;
+    energy = local_step();
+    energies_.push_back(energy);
+    change = previous > negligible ? std::abs(previous - energy) / previous : 0.0;
+    if (tol > 0 && (change <= tol || energy <= negligible)) converged = true;
+  }
+  if (tol == 0) converged = true;  // exactly max_iterations were asked for
+  frame_report_.iterations = iterations;
+  frame_report_.residual = change;
+  frame_report_.converged = converged;
+  if (!converged)
+    frame_report_.warnings.push_back("arap: stopped after " + std::to_string(iterations) +
+                                     " iterations with a relative energy change of " + std::to_string(change) +
+                                     " > tolerance " + std::to_string(tol) +
+                                     "; raise --iterations, or continue from this result with another frame");
+  out = x_;
+}
+
+void ArapDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
+  affine_targets(rest_, constrained_, handle_of_constrained_, transforms, targets_);
+  run(targets_, out);
+}
+
+void ArapDeformer::do_deform_to(const Positions& targets, Positions& out) { run(targets, out); }
+
+void ArapDeformer::do_set_initial_guess(const Positions& X) { x_ = X; }
+
+void ArapDeformer::do_reset() {
+  x_ = rest_;
+  std::fill(rotation_.begin(), rotation_.end(), Mat3::Identity());
+  std::fill(quaternion_.begin(), quaternion_.end(), Eigen::Vector4d(0, 0, 0, 1));
+  energies_.clear();
+}
+
+}  // namespace msd

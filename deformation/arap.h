@@ -1,0 +1,117 @@
+#pragma once
+//! \file As-rigid-as-possible surface modelling (Sorkine & Alexa 2007; seed 9.8): alternate a local step
+//! (the best rotation R_i of every vertex's cell) and a global step (the positions that fit those
+//! rotations best, one sparse back-substitution), each of which lowers the energy
+//!   E(x, R) = Σ_i Σ_(a,b) w_ab |(x_a − x_b) − R_i (p_a − p_b)|²
+//! where the inner sum runs over the edges of the cell of vertex i (its spokes, or its spokes and rims).
+
+#include <vector>
+
+#include "core/solver.h"
+#include "deformation/deformer.h"
+
+namespace msd {
+
+//! Which edges make up the rigid cell of a vertex.
+enum class ArapEnergy {
+  //! The edges (i, j) to the one-ring, weighted with the edge's cotangent weight (cot α + cot β)/2
+  //! (Sorkine & Alexa 2007, eq. 3). Default; what the rigidity metric of analysis/metrics.h measures.
+  Spokes,
+  //! Every edge of the triangles incident to i (spokes and the rims opposite i), each weighted with the
+  //! cotangent of its opposite angle in that triangle, cot/2 (Chao et al. 2010; libigl's
+  //! ARAP_ENERGY_TYPE_SPOKES_AND_RIMS). Couples neighbouring cells more strongly.
+  SpokesAndRims,
+};
+const char* to_string(ArapEnergy energy);
+
+struct ArapOptions {
+  ArapEnergy energy = ArapEnergy::Spokes;
+  //! Iterations (one local plus one global step each) per frame at most; >= 1.
+  int max_iterations = 100;
+  //! The frame stops when the relative energy change of one iteration, |E_k−1 − E_k| / E_k−1, falls to
+  //! this value (>= 0). 0: run exactly max_iterations iterations.
+  double tolerance = 1e-4;
+  //! Negative (and tiny) cotangent weights make the global matrix indefinite and the energy unbounded
+  //! below. Every weight is clamped from below to min_weight_ratio × (mean positive weight), which keeps
+  //! the matrix SPD on any connected mesh with a constrained vertex; > 0.
+  double min_weight_ratio = 1e-3;
+};
+
+//! ARAP deformation. prepare() builds the clamped cotangent weights, factors the global matrix (the
+//! cotangent Laplacian −W with the fixed and handle vertices as known rows, ConstrainedQuadratic) once
+//! and stores the rest edge vectors of every cell in compact arrays. A frame starts from the last
+//! frame's result (warm start; the rest shape after reset(); or set_initial_guess()) with the
+//! constrained vertices moved to their targets, then iterates: local step (per vertex, in parallel: the
+//! cell's cross-covariance A_i, its best rotation, the cell energy), stopping test, global step (the
+//! right-hand side b_i = Σ_j w_ij/2 (R_i + R_j)(p_i − p_j) assembled in parallel, one back-substitution
+//! for the three coordinate columns). Nothing is allocated inside the iteration loop.
+//!
+//! The rotations are fitted by the warm-started iteration of Müller et al. 2016 ("A robust method to
+//! extract the rotational part of deformations"), starting from the vertex's rotation of the previous
+//! iteration; a vertex whose iteration has not converged after a few steps gets the exact SVD fit
+//! (core best_rotation). A fit that would not raise tr(Rᵀ A) keeps the previous rotation, so the energy
+//! measured at the local steps never increases.
+class ArapDeformer : public Deformer {
+ public:
+  //! \throw InvalidInput for max_iterations < 1, a negative or non-finite tolerance, or
+  //! min_weight_ratio not in (0, 1].
+  explicit ArapDeformer(ArapOptions options = {});
+  const std::string& name() const override { return name_; }
+  //! Surface, iterative, exact constraints, per-vertex targets, initial guess, reproduces rigid motions.
+  DeformerTraits traits() const override;
+  const ArapOptions& options() const { return options_; }
+
+  //! The energy measured at each local step of the last frame: entry k is E(x_k, R_k+1), x_0 the
+  //! initial guess with the constrained vertices at their targets. One entry more than
+  //! frame_report().iterations. Non-increasing (to round-off).
+  const std::vector<double>& energy_history() const { return energies_; }
+  //! Edges whose cotangent weight was clamped (see ArapOptions::min_weight_ratio), of all edges (Spokes)
+  //! or of all triangle corners (SpokesAndRims).
+  int clamped_weights() const { return clamped_weights_; }
+  //! Seconds of the last frame's local steps and global steps (assembly and back-substitution).
+  double local_seconds() const { return local_seconds_; }
+  double global_seconds() const { return global_seconds_; }
+
+ protected:
+  void do_prepare(const Positions& P, const Faces& F, const Region& region) override;
+  void do_deform(const std::vector<Mat4>& transforms, Positions& out) override;
+  void do_deform_to(const Positions& targets, Positions& out) override;
+  void do_set_initial_guess(const Positions& X) override;
+  void do_reset() override;
+
+ private:
+  double local_step();   // rotations and energy from x_; returns E
+  void global_step();    // x_ from the rotations
+  void run(const Positions& targets, Positions& out);
+  void fit_rotation(long i, const Mat3& A);
+
+  std::string name_ = "arap";
+  ArapOptions options_;
+  int nv_ = 0;
+  Positions rest_, targets_;
+  std::vector<int> constrained_, handle_of_constrained_, unknown_;
+  ConstrainedQuadratic system_;
+
+  // Spokes: compressed rows of the one-rings, w_ij, w_ij (p_i − p_j) (3 per half-edge), and per vertex
+  // Σ_j w_ij (p_i − p_j) and Σ_j w_ij |p_i − p_j|².
+  std::vector<int> ring_offsets_, ring_;
+  std::vector<double> ring_weight_, ring_edge_, cell_sum_;
+  // SpokesAndRims: per face its vertices, the clamped weights c_k of the edges opposite its corners k,
+  // c_k (p_k+1 − p_k+2) (9), and per corner s_k = Σ over the corner's two edges of c (p_k − p_other) (9);
+  // the (3 face + corner) indices around each vertex in compressed rows; per-face work buffers.
+  std::vector<int> corner_offsets_, corners_, face_vertex_;
+  std::vector<double> face_weight_, face_edge_, face_corner_, face_buffer_, face_dsq_;
+  std::vector<double> cell_rest_;  // per vertex: Σ over its cell of w |p_a − p_b|²
+
+  // Iteration state.
+  RowPositions x_;                        // current positions, row-major for random access
+  std::vector<Mat3> rotation_;            // R_i
+  std::vector<Eigen::Vector4d> quaternion_;  // R_i as (x, y, z, w), the warm start of the fit
+  std::vector<double> vertex_energy_;
+  Eigen::MatrixXd rhs_known_, rhs_, x_unknown_;
+  std::vector<double> energies_;
+  int clamped_weights_ = 0;
+  double local_seconds_ = 0, global_seconds_ = 0, rest_energy_scale_ = 0;
+};
+
+}  // namespace msd

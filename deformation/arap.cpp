@@ -200,6 +200,15 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
   targets_.resize(constrained_.size(), 3);
   energies_.clear();
   energies_.reserve(options_.max_iterations + 1);
+  // Harmonic fields of the handles (1 on handle k, 0 on the other constrained vertices), for the
+  // rotations of a cold start.
+  const int nh = region.num_handles();
+  Eigen::MatrixXd known = Eigen::MatrixXd::Zero(constrained_.size(), nh);
+  for (size_t c = 0; c < constrained_.size(); ++c)
+    if (handle_of_constrained_[c] >= 0) known(c, handle_of_constrained_[c]) = 1;
+  system_.solve(known, handle_field_);
+  handle_quaternion_.assign(nh, Eigen::Vector4d(0, 0, 0, 1));
+  cold_ = true;
 }
 
 void ArapDeformer::fit_rotation(long i, const Mat3& A) {
@@ -358,6 +367,42 @@ void ArapDeformer::global_step() {
   global_seconds_ += seconds_since(t0);
 }
 
+void ArapDeformer::cold_start(const Positions& targets) {
+  // Each handle's best rotation from its vertices' rest and target offsets (Kabsch), then per vertex
+  // the normalised blend of the handles' quaternions and the identity with the harmonic weights, and one
+  // global step with those rotations.
+  const int nh = static_cast<int>(handle_quaternion_.size());
+  for (int k = 0; k < nh; ++k) {
+    Vec3 rest_mean = Vec3::Zero(), target_mean = Vec3::Zero();
+    int count = 0;
+    for (size_t c = 0; c < constrained_.size(); ++c)
+      if (handle_of_constrained_[c] == k)
+        rest_mean += rest_.row(constrained_[c]).transpose(), target_mean += targets.row(c).transpose(), ++count;
+    if (count < 2) continue;
+    rest_mean /= count, target_mean /= count;
+    Mat3 C = Mat3::Zero();
+    for (size_t c = 0; c < constrained_.size(); ++c)
+      if (handle_of_constrained_[c] == k)
+        C.noalias() += (rest_.row(constrained_[c]).transpose() - rest_mean) * (targets.row(c).transpose() - target_mean).transpose();
+    Eigen::Quaterniond q(best_rotation(C));
+    if (q.w() < 0) q.coeffs() = -q.coeffs();
+    handle_quaternion_[k] = q.coeffs();
+  }
+  parallel_for_chunks(nv_, [&](long b, long e) {
+    for (long i = b; i < e; ++i) {
+      Eigen::Vector4d q(0, 0, 0, 1);
+      for (int k = 0; k < nh; ++k) {
+        const double s = std::clamp(handle_field_(i, k), 0.0, 1.0);
+        q += s * (handle_quaternion_[k] - Eigen::Vector4d(0, 0, 0, 1));
+      }
+      q.normalize();
+      quaternion_[i] = q;
+      rotation_[i] = Eigen::Quaterniond(q[3], q[0], q[1], q[2]).toRotationMatrix();
+    }
+  }, kGrain);
+  global_step();
+}
+
 void ArapDeformer::run(const Positions& targets, Positions& out) {
   local_seconds_ = global_seconds_ = 0;
   for (size_t c = 0; c < constrained_.size(); ++c) x_.row(constrained_[c]) = targets.row(c);
@@ -366,6 +411,8 @@ void ArapDeformer::run(const Positions& targets, Positions& out) {
     rhs_known_.noalias() = system_.coupling() * targets;
     rhs_known_ *= -1.0;
   }
+  if (cold_) cold_start(targets);
+  cold_ = false;
   energies_.clear();
   const double tol = options_.tolerance;
   // Energies at or below this are round-off of a rigid solution (E is evaluated as a difference of
@@ -389,11 +436,6 @@ void ArapDeformer::run(const Positions& targets, Positions& out) {
   frame_report_.iterations = iterations;
   frame_report_.residual = change;
   frame_report_.converged = converged;
-  if (!converged)
-    frame_report_.warnings.push_back("arap: stopped after " + std::to_string(iterations) +
-                                     " iterations with a relative energy change of " + std::to_string(change) +
-                                     " > tolerance " + std::to_string(tol) +
-                                     "; raise --iterations, or continue from this result with another frame");
   out = x_;
 }
 
@@ -404,13 +446,17 @@ void ArapDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out
 
 void ArapDeformer::do_deform_to(const Positions& targets, Positions& out) { run(targets, out); }
 
-void ArapDeformer::do_set_initial_guess(const Positions& X) { x_ = X; }
+void ArapDeformer::do_set_initial_guess(const Positions& X) {
+  x_ = X;
+  cold_ = false;
+}
 
 void ArapDeformer::do_reset() {
   x_ = rest_;
   std::fill(rotation_.begin(), rotation_.end(), Mat3::Identity());
   std::fill(quaternion_.begin(), quaternion_.end(), Eigen::Vector4d(0, 0, 0, 1));
   energies_.clear();
+  cold_ = true;
 }
 
 }  // namespace msd

@@ -40,8 +40,11 @@ struct ArapOptions {
 //! ARAP deformation. prepare() builds the clamped cotangent weights, factors the global matrix (the
 //! cotangent Laplacian −W with the fixed and handle vertices as known rows, ConstrainedQuadratic) once
 //! and stores the rest edge vectors of every cell in compact arrays. A frame starts from the last
-//! frame's result (warm start; the rest shape after reset(); or set_initial_guess()) with the
-//! constrained vertices moved to their targets, then iterates: local step (per vertex, in parallel: the
+//! frame's result (warm start, or set_initial_guess()) with the constrained vertices moved to their
+//! targets. A cold start (the first frame, or after reset()) starts instead from one global step with
+//! rotations blended from the handles' (each handle's best rotation of its targets, slerp-like
+//! normalised quaternion blend with the identity by a harmonic weight per handle, computed in prepare()),
+//! which reproduces a rigid motion of all constrained vertices at once. Then the frame iterates: local step (per vertex, in parallel: the
 //! cell's cross-covariance A_i, its best rotation, the cell energy), stopping test, global step (the
 //! right-hand side b_i = Σ_j w_ij/2 (R_i + R_j)(p_i − p_j) assembled in parallel, one back-substitution
 //! for the three coordinate columns). Nothing is allocated inside the iteration loop.
@@ -83,6 +86,7 @@ class ArapDeformer : public Deformer {
   double local_step();   // rotations and energy from x_; returns E
   void global_step();    // x_ from the rotations
   void run(const Positions& targets, Positions& out);
+  void cold_start(const Positions& targets);
   void fit_rotation(long i, const Mat3& A);
 
   std::string name_ = "arap";
@@ -110,6 +114,9 @@ class ArapDeformer : public Deformer {
   std::vector<double> vertex_energy_;
   Eigen::MatrixXd rhs_known_, rhs_, x_unknown_;
   std::vector<double> energies_;
+  Eigen::MatrixXd handle_field_;                   // #V by #handles harmonic weights
+  std::vector<Eigen::Vector4d> handle_quaternion_;  // per handle, this frame (x, y, z, w)
+  bool cold_ = true;
   int clamped_weights_ = 0;
   double local_seconds_ = 0, global_seconds_ = 0, rest_energy_scale_ = 0;
 };

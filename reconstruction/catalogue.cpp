@@ -44,6 +44,8 @@ Catalogue make_builtin() {
          [](const MethodSettings&, const Catalogue&) { return std::make_unique<GradientEditing>(); }});
   c.add({"laplacian", "9.4.2", "Laplacian editing: implicit linearised similarities per vertex (9.11), factored once",
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<LaplacianEditing>(s.laplacian); }});
+  c.add({"arap", "9.8", "as-rigid-as-possible (Sorkine & Alexa 2007): local rotations and a global solve factored once, warm-started",
+         [](const MethodSettings& s, const Catalogue&) { return std::make_unique<ArapDeformer>(s.arap); }});
   for (const std::string& encoding : encoding_names())
     c.add({"multiscale-" + encoding, "9.3",
            "multi-scale: decompose S = B ⊕ D, deform B with the base method, add the " + encoding + " details back",

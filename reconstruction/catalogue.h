@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "deformation/arap.h"
 #include "deformation/deformer.h"
 #include "deformation/gradient_editing.h"
 #include "deformation/laplacian_editing.h"
@@ -23,6 +24,7 @@ struct MethodSettings {
   ShellOptions shell;                  //!< shell (and the base of multiscale-* with base_method "shell")
   PropagationOptions propagation;      //!< propagate
   LaplacianEditingOptions laplacian;   //!< laplacian
+  ArapOptions arap;                    //!< arap
   DecompositionOptions decomposition;  //!< multiscale-*: how S is split into B and details
   EncodingOptions encoding;            //!< multiscale-*: the encodings' options (the kind comes from the name)
   //! multiscale-*: the catalogue method that deforms the base (any single-scale row).

@@ -118,6 +118,21 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   laplacian->add_flag("--laplacian-explicit{false}", settings.laplacian.implicit,
                       "explicit variant: δ'_i = M_i δ_i with M_i propagated from the handles (9.4.3) instead of "
                       "the implicit linearised similarities (9.11)");
+  auto* iterative = cmd.add_option_group("iterative methods", "arap: iterations per frame and stopping test");
+  iterative->add_option("--iterations", settings.arap.max_iterations, "iterations per frame at most")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  iterative->add_option("--tolerance", settings.arap.tolerance,
+                        "stop when one iteration changes the energy by at most this fraction; 0: exactly --iterations")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  auto* arap = cmd.add_option_group("arap", "arap: as-rigid-as-possible (9.8)");
+  arap->add_option("--arap-energy", settings.arap.energy, "rigid cells: spokes or spokes-and-rims")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, ArapEnergy>{{"spokes", ArapEnergy::Spokes},
+                                            {"spokes-and-rims", ArapEnergy::SpokesAndRims}},
+          CLI::ignore_case))
+      ->default_str("spokes");
   auto* ms = cmd.add_option_group("multiscale", "multiscale: decompose, deform the base, add the details back (9.3)");
   decomposition.add_to(*ms);
   std::vector<std::string> single_scale;

@@ -1,0 +1,150 @@
+#include <catch2/catch.hpp>
+
+#include "analysis/metrics.h"
+#include "core/edit_case.h"
+#include "core/errors.h"
+#include "core/scenes.h"
+#include "deformation/arap.h"
+#include "deformation/shell.h"
+#include "test_util.h"
+
+using namespace msd;
+
+namespace {
+
+Scene scene(const std::string& name, int resolution = 3000) {
+  SceneOptions o;
+  o.resolution = resolution;
+  return make_scene(name, o);
+}
+
+double constraint_error(const Positions& rest, const Positions& out, const Region& region, const std::vector<Mat4>& T) {
+  double err = 0;
+  for (int v : region.constrained_vertices()) {
+    const int k = region.handle_of(v);
+    const Vec3 target = k < 0 ? Vec3(rest.row(v)) : transform_point(T[k], rest.row(v));
+    err = std::max(err, (Vec3(out.row(v)) - target).norm());
+  }
+  return err;
+}
+
+ArapOptions options(ArapEnergy energy, int iterations, double tolerance) {
+  ArapOptions o;
+  o.energy = energy;
+  o.max_iterations = iterations;
+  o.tolerance = tolerance;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("arap: options are checked", "[arap]") {
+  CHECK_THROWS_AS(ArapDeformer(options(ArapEnergy::Spokes, 0, 1e-4)), InvalidInput);
+  CHECK_THROWS_AS(ArapDeformer(options(ArapEnergy::Spokes, 10, -1)), InvalidInput);
+  ArapOptions o;
+  o.min_weight_ratio = 0;
+  CHECK_THROWS_AS(ArapDeformer(o), InvalidInput);
+}
+
+TEST_CASE("arap: constraints are met exactly, both energies, generated and survey edits", "[arap]") {
+  for (ArapEnergy energy : {ArapEnergy::Spokes, ArapEnergy::SpokesAndRims}) {
+    const Scene s = scene("bar-bend120");
+    ArapDeformer arap(options(energy, 30, 0));
+    arap.prepare(s.P, s.F, s.region);
+    const Positions out = arap.deform(s.transforms);
+    CHECK(constraint_error(s.P, out, s.region, s.transforms) <= 1e-12 * bounding_box_diagonal(s.P));
+  }
+  const EditCase c = file_case(test::shared_data("survey/cactus.off"), test::shared_data("survey/cactus.sel"),
+                               test::shared_data("survey/cactus.def"));
+  ArapDeformer arap(options(ArapEnergy::Spokes, 20, 0));
+  arap.prepare(c.P, c.F, c.region);
+  const Positions out = arap.deform(c.transforms);
+  CHECK(constraint_error(c.P, out, c.region, c.transforms) <= 1e-12 * bounding_box_diagonal(c.P));
+}
+
+TEST_CASE("arap: a rigid motion of all constrained vertices moves the whole shape rigidly", "[arap]") {
+  const Scene s = scene("bend120");
+  std::vector<int> codes = s.region.codes();
+  for (int& c : codes)
+    if (c != Region::kFree) c = Region::kFirstHandle;
+  const Region one = Region::from_codes(codes);
+  Mat4 T = Mat4::Identity();
+  T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(2.0, Vec3(1, -2, 0.5).normalized()).toRotationMatrix();
+  T.topRightCorner<3, 1>() = Vec3(0.4, 0.1, -0.3);
+  for (ArapEnergy energy : {ArapEnergy::Spokes, ArapEnergy::SpokesAndRims}) {
+    ArapDeformer arap(options(energy, 200, 1e-12));
+    arap.prepare(s.P, s.F, one);
+    const Positions out = arap.deform({T});
+    Positions expected(s.P.rows(), 3);
+    for (Eigen::Index v = 0; v < s.P.rows(); ++v) expected.row(v) = transform_point(T, s.P.row(v));
+    CHECK(test::max_row_distance(out, expected) <= 1e-8 * bounding_box_diagonal(s.P));
+    CHECK(arap.frame_report().converged);
+  }
+}
+
+TEST_CASE("arap: the energy never increases over the iterations", "[arap]") {
+  for (ArapEnergy energy : {ArapEnergy::Spokes, ArapEnergy::SpokesAndRims}) {
+    for (const char* name : {"bend120", "bar-twist135"}) {
+      const Scene s = scene(name);
+      ArapDeformer arap(options(energy, 60, 0));
+      arap.prepare(s.P, s.F, s.region);
+      arap.deform(s.transforms);
+      const std::vector<double>& E = arap.energy_history();
+      REQUIRE(E.size() == 61);
+      for (size_t k = 1; k < E.size(); ++k) CHECK(E[k] <= E[k - 1] * (1 + 1e-12) + 1e-15 * E[0]);
+      CHECK(E.back() < 0.9 * E.front());  // and it does decrease
+    }
+  }
+}
+
+TEST_CASE("arap: a tolerance of 0 runs exactly max_iterations iterations", "[arap]") {
+  const Scene s = scene("bend120");
+  for (int n : {1, 7, 25}) {
+    ArapDeformer arap(options(ArapEnergy::Spokes, n, 0));
+    arap.prepare(s.P, s.F, s.region);
+    arap.deform(s.transforms);
+    CHECK(arap.frame_report().iterations == n);
+    CHECK(arap.frame_report().converged);
+    CHECK(arap.frame_report().residual >= 0);
+    CHECK(arap.frame_report().warnings.empty());
+  }
+}
+
+TEST_CASE("arap: a warm start converges in fewer iterations than a cold start after a small change", "[arap]") {
+  const Scene s = scene("bend120");
+  ArapDeformer arap(options(ArapEnergy::Spokes, 1000, 1e-5));
+  arap.prepare(s.P, s.F, s.region);
+  arap.deform(s.transforms);
+  REQUIRE(arap.frame_report().converged);
+  std::vector<Mat4> moved = s.transforms;
+  moved[0](2, 3) += 0.001;  // the handle 0.1% of the plane's size higher
+  arap.deform(moved);
+  const int warm = arap.frame_report().iterations;
+  REQUIRE(arap.frame_report().converged);
+  arap.reset();
+  arap.deform(moved);
+  const int cold = arap.frame_report().iterations;
+  INFO("warm " << warm << ", cold " << cold);
+  CHECK(warm < cold);
+  // Not converged within the cap: the report says so.
+  ArapDeformer capped(options(ArapEnergy::Spokes, 3, 1e-9));
+  capped.prepare(s.P, s.F, s.region);
+  capped.deform(s.transforms);
+  CHECK_FALSE(capped.frame_report().converged);
+  CHECK(capped.frame_report().iterations == 3);
+  CHECK_FALSE(capped.frame_report().warnings.empty());
+}
+
+TEST_CASE("arap: the bent bumpy plane is more rigid than the shell's", "[arap]") {
+  const Scene s = scene("bend120", 10000);
+  ShellDeformer shell;
+  shell.prepare(s.P, s.F, s.region);
+  const double shell_rigidity = rigidity_error(s.P, shell.deform(s.transforms), s.F).stats.mean;
+  for (ArapEnergy energy : {ArapEnergy::Spokes, ArapEnergy::SpokesAndRims}) {
+    ArapDeformer arap(options(energy, 300, 1e-6));
+    arap.prepare(s.P, s.F, s.region);
+    const double arap_rigidity = rigidity_error(s.P, arap.deform(s.transforms), s.F).stats.mean;
+    INFO(to_string(energy) << ": arap " << arap_rigidity << ", shell " << shell_rigidity);
+    CHECK(arap_rigidity < 0.5 * shell_rigidity);
+  }
+}

@@ -8,6 +8,7 @@
 
 #include "core/errors.h"
 #include "core/laplacian.h"
+#include "core/mesh.h"
 #include "core/parallel.h"
 #include "core/rotation.h"
 
@@ -38,6 +39,8 @@ ArapDeformer::ArapDeformer(ArapOptions options) : options_(options) {
     throw InvalidInput("arap: max_iterations must be at least 1 (got " + std::to_string(options_.max_iterations) + ")");
   if (!(options_.tolerance >= 0) || !std::isfinite(options_.tolerance))
     throw InvalidInput("arap: tolerance must be finite and >= 0 (got " + std::to_string(options_.tolerance) + ")");
+  if (options_.anderson < 0 || options_.anderson > 8)
+    throw InvalidInput("arap: anderson must lie in [0, 8] (got " + std::to_string(options_.anderson) + ")");
   if (!(options_.min_weight_ratio > 0 && options_.min_weight_ratio <= 1))
     throw InvalidInput("arap: min_weight_ratio must lie in (0, 1] (got " + std::to_string(options_.min_weight_ratio) +
                        ")");
@@ -186,8 +189,6 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
                       e.index());
   }
   unknown_ = system_.unknown();
-  rest_energy_scale_ = 0;
-  for (double r : cell_rest_) rest_energy_scale_ += r;
 
   // Iteration state and buffers, sized once.
   x_ = rest_;
@@ -200,6 +201,12 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
   targets_.resize(constrained_.size(), 3);
   energies_.clear();
   energies_.reserve(options_.max_iterations + 1);
+  const long n = 3 * static_cast<long>(unknown_.size());
+  u_.resize(n), warm_.resize(n), f_.resize(n), f_previous_.resize(n), g_previous_.resize(n);
+  const int m = std::max(options_.anderson, 1);
+  delta_f_.resize(n, m), delta_g_.resize(n, m);
+  normal_.resize(m, m);
+  diagonal_ = bounding_box_diagonal(P);
   // Harmonic fields of the handles (1 on handle k, 0 on the other constrained vertices), for the
   // rotations of a cold start.
   const int nh = region.num_handles();
@@ -358,13 +365,17 @@ void ArapDeformer::global_step() {
     }, kGrain);
   }
   system_.solver().solve(rhs_, x_unknown_);  // one back-substitution, three columns
-  const double* xu = x_unknown_.data();
+  global_seconds_ += seconds_since(t0);
+}
+
+void ArapDeformer::scatter(const Eigen::VectorXd& u) {
+  const long nu = static_cast<long>(unknown_.size());
+  const double* src = u.data();
   double* x = x_.data();
   parallel_for_chunks(nu, [&](long b, long e) {
-    for (long u = b; u < e; ++u)
-      for (int d = 0; d < 3; ++d) x[3 * static_cast<long>(unknown_[u]) + d] = xu[d * nu + u];
+    for (long k = b; k < e; ++k)
+      for (int d = 0; d < 3; ++d) x[3 * static_cast<long>(unknown_[k]) + d] = src[d * nu + k];
   }, 1 << 14);
-  global_seconds_ += seconds_since(t0);
 }
 
 void ArapDeformer::cold_start(const Positions& targets) {
@@ -401,6 +412,48 @@ void ArapDeformer::cold_start(const Positions& targets) {
     }
   }, kGrain);
   global_step();
+  u_ = Eigen::Map<const Eigen::VectorXd>(x_unknown_.data(), x_unknown_.size());
+  scatter(u_);
+}
+
+double ArapDeformer::anderson_step(double energy) {
+  // Peng et al. 2018, Algorithm 1 on the fixed point u = G(u) of one local/global iteration: with the
+  // residual f = G(u) − u and the differences ΔF, ΔG of the last m residuals and images, the next
+  // iterate is G(u) − ΔG θ with θ = argmin |f − ΔF θ|.
+  const long n = u_.size();
+  const Eigen::Map<const Eigen::VectorXd> g(x_unknown_.data(), n);
+  const int m = options_.anderson;
+  f_ = g - u_;
+  if (has_previous_) {
+    const int c = next_column_;
+    delta_f_.col(c) = f_ - f_previous_;
+    delta_g_.col(c) = g - g_previous_;
+    history_ = std::min(history_ + 1, m);
+    next_column_ = (c + 1) % m;
+    for (int j = 0; j < history_; ++j) normal_(c, j) = normal_(j, c) = delta_f_.col(c).dot(delta_f_.col(j));
+  }
+  f_previous_ = f_;
+  g_previous_ = g;
+  has_previous_ = true;
+  u_ = g;
+  if (history_ > 0) {
+    Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 8, 1> rhs(history_);
+    for (int j = 0; j < history_; ++j) rhs[j] = delta_f_.col(j).dot(f_);
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 8, 8> A = normal_.topLeftCorner(history_, history_);
+    A.diagonal().array() += 1e-12 * A.diagonal().maxCoeff() + std::numeric_limits<double>::min();
+    const Eigen::LDLT<decltype(A)> ldlt(A);
+    const auto theta = ldlt.solve(rhs).eval();
+    if (ldlt.info() == Eigen::Success && theta.allFinite())
+      for (int j = 0; j < history_; ++j) u_.noalias() -= theta[j] * delta_g_.col(j);
+  }
+  scatter(u_);
+  const double accelerated = local_step();
+  if (accelerated <= energy || history_ == 0) return accelerated;
+  // The extrapolation raised the energy: take the plain iterate and start the history afresh.
+  u_ = g;
+  scatter(u_);
+  history_ = next_column_ = 0;
+  return local_step();
 }
 
 void ArapDeformer::run(const Positions& targets, Positions& out) {
@@ -411,30 +464,58 @@ void ArapDeformer::run(const Positions& targets, Positions& out) {
     rhs_known_.noalias() = system_.coupling() * targets;
     rhs_known_ *= -1.0;
   }
-  if (cold_) cold_start(targets);
+  const long nu = static_cast<long>(unknown_.size());
+  for (long k = 0; k < nu; ++k)
+    for (int d = 0; d < 3; ++d) u_[d * nu + k] = x_(unknown_[k], d);
+  double energy;
+  if (cold_) {
+    cold_start(targets);
+    energy = local_step();
+  } else {
+    // The warm start against the cold one: keep the lower energy.
+    const double warm = local_step();
+    warm_ = u_;
+    cold_start(targets);
+    energy = local_step();
+    if (warm < energy) {
+      u_ = warm_;
+      scatter(u_);
+      energy = local_step();
+    }
+  }
   cold_ = false;
   energies_.clear();
-  const double tol = options_.tolerance;
-  // Energies at or below this are round-off of a rigid solution (E is evaluated as a difference of
-  // sums of the size of the rest energy).
-  const double negligible = 1e-13 * rest_energy_scale_;
-  double energy = local_step(), change = 1;
   energies_.push_back(energy);
+  history_ = next_column_ = 0;
+  has_previous_ = false;
+  const double tol = options_.tolerance * diagonal_;
+  const Eigen::Map<const Eigen::VectorXd> g(x_unknown_.data(), x_unknown_.size());
   int iterations = 0;
-  bool converged = tol > 0 && energy <= negligible;
-  if (converged) change = 0;
+  double step = 0;
+  bool converged = nu == 0;
   while (!converged && iterations < options_.max_iterations) {
     global_step();
     ++iterations;
-    const double previous = energy;
-    energy = local_step();
+    // The largest vertex move of this iteration.
+    step = 0;
+    for (long k = 0; k < nu; ++k) {
+      const double dx = g[k] - u_[k], dy = g[nu + k] - u_[nu + k], dz = g[2 * nu + k] - u_[2 * nu + k];
+      step = std::max(step, dx * dx + dy * dy + dz * dz);
+    }
+    step = std::sqrt(step);
+    converged = tol > 0 && step <= tol;
+    if (converged || iterations == options_.max_iterations || options_.anderson == 0) {
+      u_ = g;
+      scatter(u_);
+      energy = local_step();
+    } else {
+      energy = anderson_step(energy);
+    }
     energies_.push_back(energy);
-    change = previous > negligible ? std::abs(previous - energy) / previous : 0.0;
-    if (tol > 0 && (change <= tol || energy <= negligible)) converged = true;
   }
   if (tol == 0) converged = true;  // exactly max_iterations were asked for
   frame_report_.iterations = iterations;
-  frame_report_.residual = change;
+  frame_report_.residual = step / diagonal_;
   frame_report_.converged = converged;
   out = x_;
 }

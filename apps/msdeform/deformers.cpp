@@ -119,20 +119,26 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
                       "explicit variant: δ'_i = M_i δ_i with M_i propagated from the handles (9.4.3) instead of "
                       "the implicit linearised similarities (9.11)");
   auto* iterative = cmd.add_option_group("iterative methods", "arap: iterations per frame and stopping test");
-  iterative->add_option("--iterations", settings.arap.max_iterations, "iterations per frame at most")
+  arap_options = {};
+  arap_options.push_back(iterative->add_option("--iterations", settings.arap.max_iterations, "iterations per frame at most")
       ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  iterative->add_option("--tolerance", settings.arap.tolerance,
-                        "stop when one iteration changes the energy by at most this fraction; 0: exactly --iterations")
+      ->capture_default_str());
+  arap_options.push_back(iterative->add_option("--tolerance", settings.arap.tolerance,
+                        "stop when one iteration moves no vertex by more than this fraction of the bounding-box "
+                        "diagonal; 0: exactly --iterations")
       ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
+      ->capture_default_str());
   auto* arap = cmd.add_option_group("arap", "arap: as-rigid-as-possible (9.8)");
-  arap->add_option("--arap-energy", settings.arap.energy, "rigid cells: spokes or spokes-and-rims")
+  arap_options.push_back(arap->add_option("--anderson", settings.arap.anderson,
+                   "Anderson acceleration window (Peng et al. 2018), 0: plain local/global")
+      ->check(CLI::Range(0, 8))
+      ->capture_default_str());
+  arap_options.push_back(arap->add_option("--arap-energy", settings.arap.energy, "rigid cells: spokes or spokes-and-rims")
       ->transform(CLI::CheckedTransformer(
           std::map<std::string, ArapEnergy>{{"spokes", ArapEnergy::Spokes},
                                             {"spokes-and-rims", ArapEnergy::SpokesAndRims}},
           CLI::ignore_case))
-      ->default_str("spokes");
+      ->default_str("spokes"));
   auto* ms = cmd.add_option_group("multiscale", "multiscale: decompose, deform the base, add the details back (9.3)");
   decomposition.add_to(*ms);
   std::vector<std::string> single_scale;
@@ -148,6 +154,11 @@ std::string DeformerOptions::method_name() const {
   if (!multiscale && (decomposition.given() || (base_method_option && base_method_option->count() > 0)))
     throw InvalidInput("--base, --detail-scale, --fairing, --remesh-base and --base-method apply to --method "
                        "multiscale; --method " + method + " has no base to decompose");
+  const bool arap = method == "arap" || (multiscale && settings.base_method == "arap");
+  for (const CLI::Option* o : arap_options)
+    if (o->count() > 0 && !arap)
+      throw InvalidInput(o->get_name() + " applies to --method arap (or multiscale with --base-method arap), not --method " +
+                         method);
   if (method == "multiscale") return "multiscale-" + encoding;
   if (encoding_option && encoding_option->count() > 0)
     throw InvalidInput("--encoding " + encoding + " applies to --method multiscale; --method " + method +

@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -38,6 +39,7 @@ struct DeformerOptions {
   std::string encoding = "normal";
   CLI::Option* encoding_option = nullptr;  // set by add_to(): whether --encoding was given
   CLI::Option* base_method_option = nullptr;
+  std::vector<CLI::Option*> arap_options;  // --iterations, --tolerance, --anderson, --arap-energy
   MethodSettings settings;
   DecompositionArgs decomposition;
   // --method, --encoding and add_settings().

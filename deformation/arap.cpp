@@ -16,9 +16,9 @@ namespace msd {
 namespace {
 
 constexpr long kGrain = 2048;
-// Newton steps of the rotation fit before it falls back to the SVD; the fit has converged once a step
-// turns the rotation by less than kFitAngle (radians).
-constexpr int kFitIterations = 6;
+// Newton steps of the rotation fit per local step (warm-started from the last local step's rotation, so
+// over the iterations the fits converge with the positions); a step of |δ|² below kFitAngle ends them.
+constexpr int kFitIterations = 2;
 constexpr double kFitAngle = 1e-10;
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -219,44 +219,42 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
 }
 
 void ArapDeformer::fit_rotation(long i, const Mat3& A) {
-  const Mat3 R0 = rotation_[i];
-  const double f0 = alignment(R0, A);
+  const double f0 = alignment(rotation_[i], A);
   const double scale = A.norm();
   if (!(scale > 0)) return;  // an empty cell: every rotation fits; keep the last one
   Eigen::Quaterniond q(quaternion_[i][3], quaternion_[i][0], quaternion_[i][1], quaternion_[i][2]);
-  Mat3 R = R0;
-  double step2 = std::numeric_limits<double>::infinity();
-  for (int it = 0; it < kFitIterations && step2 > kFitAngle * kFitAngle; ++it) {
+  Mat3 R = rotation_[i];
+  bool newton = true;
+  for (int it = 0; it < kFitIterations && newton; ++it) {
     // Newton step on f(δ) = tr((R exp[δ]×)ᵀ A) in the body frame: with M = Rᵀ A, gradient 2m
-    // (skew(M) = [m]×) and Hessian −(tr M · I − sym M); far from the optimum (Hessian not negative
-    // definite) a gradient step scaled by tr M as in Müller et al. 2016.
+    // (skew(M) = [m]×) and Hessian −(tr M · I − sym M) = −K. K is solved in closed form (adjugate)
+    // when positive definite; otherwise the exact fit below.
     const Mat3 M = R.transpose() * A;
     const Vec3 g(M(2, 1) - M(1, 2), M(0, 2) - M(2, 0), M(1, 0) - M(0, 1));
-    const double trace = M.trace();
-    const Mat3 K = trace * Mat3::Identity() - 0.5 * (M + M.transpose());
-    Vec3 delta;
-    Eigen::LLT<Mat3> llt(K);
-    const bool newton = trace > 0 && llt.info() == Eigen::Success;
-    if (newton) {
-      delta = llt.solve(g);
-    } else {
-      delta = g / (std::abs(trace) + 1e-12 * scale);
-    }
-    step2 = delta.squaredNorm();
-    if (!std::isfinite(step2)) break;
-    // Newton converges quadratically: after a step of δ the error is O(|δ|²), below kFitAngle once
-    // |δ|² is; a gradient step needs the step itself below kFitAngle.
-    if (newton && step2 < kFitAngle) step2 = 0;
+    const double t = M.trace();
+    const double k00 = t - M(0, 0), k11 = t - M(1, 1), k22 = t - M(2, 2);
+    const double k01 = -0.5 * (M(0, 1) + M(1, 0)), k02 = -0.5 * (M(0, 2) + M(2, 0)), k12 = -0.5 * (M(1, 2) + M(2, 1));
+    const double c00 = k11 * k22 - k12 * k12, c01 = k02 * k12 - k01 * k22, c02 = k01 * k12 - k02 * k11;
+    const double det = k00 * c00 + k01 * c01 + k02 * c02;
+    newton = k00 > 0 && k00 * k11 - k01 * k01 > 0 && det > 1e-12 * scale * scale * scale;
+    if (!newton) break;
+    const double c11 = k00 * k22 - k02 * k02, c12 = k01 * k02 - k00 * k12, c22 = k00 * k11 - k01 * k01;
+    const Vec3 delta = Vec3(c00 * g[0] + c01 * g[1] + c02 * g[2], c01 * g[0] + c11 * g[1] + c12 * g[2],
+                            c02 * g[0] + c12 * g[1] + c22 * g[2]) / det;
     // Right-multiply by the Cayley rotation (1, δ/2): by 2·atan(|δ|/2) about δ.
     q = q * Eigen::Quaterniond(1.0, 0.5 * delta.x(), 0.5 * delta.y(), 0.5 * delta.z());
     q.normalize();
     R = q.toRotationMatrix();
+    // Newton converges quadratically: after a step of |δ|² < kFitAngle the error is below kFitAngle.
+    if (delta.squaredNorm() < kFitAngle) break;
   }
-  if (!(step2 <= 1e-12)) {  // not converged (or not finite): the exact fit
+  // A fit that did not raise tr(Rᵀ A) (Newton not applicable, far from the optimum, or not finite): the
+  // exact fit. Either way the energy never increases.
+  if (!newton || !(alignment(R, A) >= f0)) {
     R = best_rotation(A.transpose());
     q = Eigen::Quaterniond(R);
+    if (!(alignment(R, A) >= f0)) return;
   }
-  if (alignment(R, A) < f0) return;  // never worse than the last rotation: E stays non-increasing
   rotation_[i] = R;
   quaternion_[i] = q.coeffs();
 }

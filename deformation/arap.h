@@ -59,11 +59,12 @@ struct ArapOptions {
 //! coordinate columns), stopping test on the step, Anderson extrapolation. The returned shape is always
 //! a plain global step's result, so the constraints hold exactly. Nothing is allocated inside a frame.
 //!
-//! The rotations are fitted by the warm-started iteration of Müller et al. 2016 ("A robust method to
-//! extract the rotational part of deformations"), starting from the vertex's rotation of the previous
-//! iteration; a vertex whose iteration has not converged after a few steps gets the exact SVD fit
-//! (core best_rotation). A fit that would not raise tr(Rᵀ A) keeps the previous rotation, so the energy
-//! measured at the local steps never increases.
+//! The rotations are fitted by at most two Newton steps per local step on tr(Rᵀ A), warm-started from the
+//! vertex's rotation of the previous local step (in the spirit of Müller et al. 2016, "A robust method
+//! to extract the rotational part of deformations"), so the fits converge along with the positions. A
+//! vertex where Newton does not apply (the Hessian not definite) or does not raise tr(Rᵀ A) gets the
+//! exact SVD fit (core best_rotation); a fit that would still lower tr(Rᵀ A) keeps the previous
+//! rotation, so the energy measured at the local steps never increases.
 class ArapDeformer : public Deformer {
  public:
   //! \throw InvalidInput for max_iterations < 1, a negative or non-finite tolerance, anderson outside

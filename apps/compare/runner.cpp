@@ -61,9 +61,12 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
       auto t0 = Clock::now();
       deformer->prepare(edit.P, edit.F, edit.region);
       r.prepare_ms = ms_since(t0);
-      deformer->deform(edit.transforms, r.result);  // warm-up
+      // Linear methods: a warm-up frame, then the timed ones. Iterative methods: one frame from rest (a
+      // second frame would start from the first's result and measure a different, shorter solve).
+      const bool iterative = deformer->traits().solve == DeformerSolve::Iterative;
+      if (!iterative) deformer->deform(edit.transforms, r.result);
       std::vector<double> frames;
-      for (int f = 0; f < std::max(1, options.timed_frames); ++f) {
+      for (int f = 0; f < (iterative ? 1 : std::max(1, options.timed_frames)); ++f) {
         t0 = Clock::now();
         deformer->deform(edit.transforms, r.result);
         frames.push_back(ms_since(t0));
@@ -99,6 +102,15 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
       for (MethodResult& r : results)
         if (r.ok) r.reference = distance_to_reference(r.result, F, ref.result, F);
   return results;
+}
+
+const MethodResult* best_multiscale(const std::vector<MethodResult>& results, const std::string& scene) {
+  const MethodResult* best = nullptr;
+  auto score = [](const MethodResult& r) { return r.reference ? r.reference->mean : r.distortion.mean; };
+  for (const MethodResult& r : results)
+    if (r.ok && r.scene == scene && r.method.rfind("multiscale-", 0) == 0 && (!best || score(r) < score(*best)))
+      best = &r;
+  return best;
 }
 
 namespace {

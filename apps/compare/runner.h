@@ -20,7 +20,9 @@ struct MethodResult {
   int vertices = 0;
   bool ok = false;
   std::string error;  //!< why the method failed (ok = false)
-  double prepare_ms = 0, frame_ms = 0;  //!< prepare(), and the median of the timed frames
+  //! prepare(); a frame: linear methods the median of the timed frames after a warm-up, iterative
+  //! methods their one frame from rest.
+  double prepare_ms = 0, frame_ms = 0;
   double handle_error = 0;              //!< max |p' − T p| over handle and fixed vertices
   Stats rigidity;                       //!< one-ring rotation residual (rigidity_error)
   Stats distortion;                     //!< detail distortion, relative to the largest detail height
@@ -42,7 +44,7 @@ struct ComparisonOptions {
   //! A method of `methods` whose result the others are measured against (seed Fig. 9.16: the nonlinear
   //! reference); empty: none. \throw InvalidInput from compare_methods() if it is not in `methods`.
   std::string reference;
-  int timed_frames = 3;            //!< frames timed after one warm-up frame
+  int timed_frames = 3;            //!< linear methods: frames timed after one warm-up frame
   bool self_intersections = true;  //!< count intersecting face pairs (CGAL; the costliest metric)
   //! Called with a line of progress (which scene, which method, how long).
   std::function<void(const std::string&)> progress;
@@ -55,6 +57,11 @@ void check_method_names(const std::vector<std::string>& methods);
 //! prepared once per call, not once per method. A method that throws, or a case the metrics cannot
 //! measure, is recorded with ok = false and its message; the others still run.
 std::vector<MethodResult> compare_methods(const EditCase& edit, const ComparisonOptions& options);
+
+//! Of the successful multi-scale results ("multiscale-<encoding>") on `scene`, the one closest to the
+//! reference (mean distance), or without a reference the one with the least mean detail distortion: the
+//! "shell + multi-scale" row of the seed's Fig. 9.16. nullptr when there is none.
+const MethodResult* best_multiscale(const std::vector<MethodResult>& results, const std::string& scene);
 
 //! The results as a table of text cells: the header (column names) first, then one row per result.
 //! Failed runs have empty measured cells (a 0 would read as perfect); unmeasured ones read "n/a".

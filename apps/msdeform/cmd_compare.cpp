@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -56,10 +57,70 @@ std::string caption(const MethodResult& r) {
                 r.self_intersections);
   std::string out = text;
   if (r.reference) {
-    std::snprintf(text, sizeof text, ", to reference %.3g", r.reference->max);
+    std::snprintf(text, sizeof text, ", to reference %.3g (mean %.3g)", r.reference->max, r.reference->mean);
     out += text;
   }
   return out;
+}
+
+// The seed's Fig. 9.16: one benchmark's three edits as columns, the method families as rows in the
+// seed's order, "shell + multi-scale" as its best encoding on each edit.
+struct Figure916 {
+  const char* title;
+  std::array<const char*, 3> scenes;  // translation, bend, twist
+};
+constexpr Figure916 kFigure916[] = {
+    {"Botsch &amp; Sorkine 2008 benchmark (--survey)", {"plane", "cylinder", "bar"}},
+    {"built-in bumpy plane", {"lift", "bend120", "twist135"}},
+    {"built-in bumpy bar", {"bar-lift", "bar-bend120", "bar-twist135"}},
+};
+constexpr std::array<std::pair<const char*, const char*>, 7> kFigure916Rows = {{
+    {"primo", "PriMo (nonlinear reference)"},
+    {"arap", "ARAP (nonlinear)"},
+    {"multiscale", "shell + multi-scale (best encoding)"},
+    {"gradient", "gradient-based editing"},
+    {"laplacian", "Laplacian editing"},
+    {"propagate", "transformation propagation"},
+    {"shell", "shell"},
+}};
+
+std::string figure916_html(const std::vector<MethodResult>& results) {
+  auto find = [&](const std::string& scene, const std::string& method) -> const MethodResult* {
+    if (method == "multiscale") return best_multiscale(results, scene);
+    for (const MethodResult& r : results)
+      if (r.scene == scene && r.method == method) return &r;
+    return nullptr;
+  };
+  std::ostringstream h;
+  for (const Figure916& fig : kFigure916) {
+    if (!std::all_of(fig.scenes.begin(), fig.scenes.end(), [&](const char* s) { return find(s, "shell") || find(s, "arap"); }))
+      continue;
+    h << "<h3>" << fig.title << "</h3>\n<table class=\"grid\"><tr><th></th>";
+    const char* edits[] = {"translation", "120° bend", "135° twist"};
+    for (int e = 0; e < 3; ++e) h << "<th>" << edits[e] << " (" << fig.scenes[e] << ")</th>";
+    h << "</tr>\n";
+    for (const auto& [method, label] : kFigure916Rows) {
+      std::ostringstream row;
+      bool any = false;
+      for (const char* scene : fig.scenes) {
+        const MethodResult* r = find(scene, method);
+        row << "<td>";
+        if (r) {
+          any = true;
+          row << "<img src=\"images/" << html_escape(r->scene + "--" + r->method) << ".png\" alt=\"\"><br>";
+          if (std::string(method) == "multiscale") row << html_escape(r->method) << ": ";
+          row << html_escape(caption(*r));
+        }
+        row << "</td>";
+      }
+      if (any) h << "<tr><th>" << label << "</th>" << row.str() << "</tr>\n";
+    }
+    h << "</table>\n";
+  }
+  if (h.str().empty()) return "";
+  return "<h2>Fig. 9.16: which method suits which edit</h2>\n<p>Rows as in the seed's Fig. 9.16, columns its three "
+         "edits; \"to reference\" is the largest (and mean) vertex distance to the reference method's result over "
+         "the bounding-box diagonal.</p>\n" + h.str();
 }
 
 std::string index_html(const std::vector<MethodResult>& results, const std::vector<SceneOutput>& scenes,
@@ -74,7 +135,8 @@ std::string index_html(const std::vector<MethodResult>& results, const std::vect
        "<p>Colour: change of the detail heights (normal displacements over a faired base, seed 9.3) against "
        "the input; one camera per scene. Files: <a href=\"metrics.csv\">metrics.csv</a>, "
        "<a href=\"metrics.md\">metrics.md</a>, <a href=\"contact_sheet.png\">contact_sheet.png</a>, meshes/.</p>\n";
-  h << "<h2>Pictures</h2>\n<table class=\"grid\"><tr><th></th>";
+  h << figure916_html(results);
+  h << "<h2>All pictures</h2>\n<table class=\"grid\"><tr><th></th>";
   for (const auto& s : scenes) h << "<th>" << html_escape(s.name) << "</th>";
   h << "</tr>\n";
   std::vector<std::string> rows = {"input"};

@@ -18,16 +18,6 @@ Scene scene(const std::string& name, int resolution = 3000) {
   return make_scene(name, o);
 }
 
-double constraint_error(const Positions& rest, const Positions& out, const Region& region, const std::vector<Mat4>& T) {
-  double err = 0;
-  for (int v : region.constrained_vertices()) {
-    const int k = region.handle_of(v);
-    const Vec3 target = k < 0 ? Vec3(rest.row(v)) : transform_point(T[k], rest.row(v));
-    err = std::max(err, (Vec3(out.row(v)) - target).norm());
-  }
-  return err;
-}
-
 ArapOptions options(ArapEnergy energy, int iterations, double tolerance) {
   ArapOptions o;
   o.energy = energy;
@@ -52,14 +42,14 @@ TEST_CASE("arap: constraints are met exactly, both energies, generated and surve
     ArapDeformer arap(options(energy, 30, 0));
     arap.prepare(s.P, s.F, s.region);
     const Positions out = arap.deform(s.transforms);
-    CHECK(constraint_error(s.P, out, s.region, s.transforms) <= 1e-12 * bounding_box_diagonal(s.P));
+    CHECK(test::constraint_error(s.P, out, s.region, s.transforms) <= 1e-12 * bounding_box_diagonal(s.P));
   }
   const EditCase c = file_case(test::shared_data("survey/cactus.off"), test::shared_data("survey/cactus.sel"),
                                test::shared_data("survey/cactus.def"));
   ArapDeformer arap(options(ArapEnergy::Spokes, 20, 0));
   arap.prepare(c.P, c.F, c.region);
   const Positions out = arap.deform(c.transforms);
-  CHECK(constraint_error(c.P, out, c.region, c.transforms) <= 1e-12 * bounding_box_diagonal(c.P));
+  CHECK(test::constraint_error(c.P, out, c.region, c.transforms) <= 1e-12 * bounding_box_diagonal(c.P));
 }
 
 TEST_CASE("arap: a rigid motion of all constrained vertices moves the whole shape rigidly", "[arap]") {

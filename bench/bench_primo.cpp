@@ -1,0 +1,93 @@
+// PriMo (seed 9.8) on the bumpy plane bent by 120°: prepare time (edges, colouring, factorisation of the
+// face Laplacian), then one frame from rest to the default tolerance (iterations, time per iteration).
+// Usage: bench_primo [resolution ...]             (default: 100k 1M)
+//        bench_primo survey SURVEY_DIR [CGAL_DIR]  quality on the survey edits (plane, cylinder, bar, cactus)
+//                                                  and CGAL's cactus: iterations, time, rigidity, handle
+//                                                  error, self-intersecting face pairs
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "analysis/metrics.h"
+#include "analysis/self_intersections.h"
+#include "bench/bench_common.h"
+#include "core/edit_case.h"
+#include "core/memory.h"
+#include "core/scenes.h"
+#include "deformation/primo.h"
+
+using namespace msd::bench;
+
+namespace {
+
+double thickness = 0.5;
+
+void quality(const std::string& name, const msd::EditCase& c) {
+  msd::PrimoOptions o;
+  o.thickness = thickness;
+  msd::PrimoDeformer d(o);
+  auto t0 = Clock::now();
+  d.prepare(c.P, c.F, c.region);
+  const double prepare = ms_since(t0);
+  t0 = Clock::now();
+  const msd::Positions out = d.deform(c.transforms);
+  const double frame = ms_since(t0);
+  const msd::FrameReport& r = d.frame_report();
+  const double rigidity = msd::rigidity_error(c.P, out, c.F).stats.mean;
+  const double handle = msd::handle_error(c.P, out, c.region, c.transforms);
+  const int pairs = msd::count_self_intersections(out, c.F);
+  std::printf("%-14s %8ld %10.1f %6d %9s %10.2e %10.1f %9.2f %10.5f %10.2e %6d\n", name.c_str(), long(c.P.rows()),
+              prepare, r.iterations, r.converged ? "yes" : "no", r.residual, frame, frame / std::max(1, r.iterations),
+              rigidity, handle, pairs);
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  msd::retain_freed_memory();
+  if (argc >= 3 && std::string(argv[1]) == "survey") {
+    const std::string dir = argv[2];
+    if (argc >= 5) thickness = std::stod(argv[4]);
+    std::printf("%-14s %8s %10s %6s %9s %10s %10s %9s %10s %10s %6s\n", "edit", "vertices", "prepare[ms]", "iters",
+                "converged", "residual", "frame[ms]", "iter[ms]", "rigidity", "handle err", "pairs");
+    for (const char* name : {"plane", "cylinder", "bar", "cactus"})
+      quality(name, msd::file_case(dir + "/" + name + ".off", dir + "/" + name + ".sel", dir + "/" + name + ".def"));
+    if (argc >= 4) {
+      const std::string cgal = argv[3];
+      quality("cgal-cactus", msd::file_case(cgal + "/data/meshes/cactus.off",
+                                            cgal + "/examples/Surface_mesh_deformation/data/cactus.sel",
+                                            cgal + "/examples/Surface_mesh_deformation/data/cactus.def"));
+    }
+    return 0;
+  }
+  const std::vector<std::string> sizes = msd::bench::sizes(argc, argv, {"100k", "1M"});
+  std::printf("%10s %12s %8s %12s %12s %14s %14s\n", "vertices", "prepare[s]", "iters", "frame[s]", "iter[ms]",
+              "warm iters", "warm frame[s]");
+  for (const auto& size : sizes) {
+    msd::SceneOptions options;
+    options.resolution = msd::parse_resolution(size);
+    const msd::Scene scene = msd::make_scene("bend120", options);
+    msd::PrimoDeformer primo;
+    auto t0 = Clock::now();
+    primo.prepare(scene.P, scene.F, scene.region);
+    const double prepare = seconds_since(t0);
+    msd::Positions out(scene.P.rows(), 3);
+    t0 = Clock::now();
+    primo.deform(scene.transforms, out);
+    const double frame = seconds_since(t0);
+    const int iterations = primo.frame_report().iterations;
+    // A warm-started frame: the handle moved on by 2° from the converged pose.
+    std::vector<msd::Mat4> T = scene.transforms;
+    msd::Mat4 step = msd::Mat4::Identity();
+    step.topLeftCorner<3, 3>() = Eigen::AngleAxisd(2 * M_PI / 180, msd::Vec3::UnitY()).toRotationMatrix();
+    T[0] = T[0] * step;
+    t0 = Clock::now();
+    primo.deform(T, out);
+    const double warm = seconds_since(t0);
+    std::printf("%10ld %12.2f %8d %12.2f %12.2f %14d %14.2f\n", long(scene.P.rows()), prepare, iterations, frame,
+                1000 * frame / std::max(1, iterations), primo.frame_report().iterations, warm);
+    std::fflush(stdout);
+  }
+  return 0;
+}

@@ -1,0 +1,114 @@
+#pragma once
+//! \file PriMo (Botsch, Pauly, Gross & Kobbelt 2006, "PriMo: Coupled Prisms for Intuitive Surface
+//! Modeling"; seed 9.7 and 9.8): the nonlinear reference of the comparison. Every face is extruded into a
+//! prism that moves rigidly; neighbouring prisms are coupled by the squared distance of their two copies
+//! of the shared side face.
+
+#include <string>
+#include <vector>
+
+#include "core/solver.h"
+#include "deformation/deformer.h"
+
+namespace msd {
+
+struct PrimoOptions {
+  //! Prism thickness h relative to the mean edge length of the rest mesh: a prism spans p ± (h/2)·n over
+  //! its three vertices (n the area-weighted vertex normals). Thicker prisms resist bending more; h → 0
+  //! leaves only the membrane (no-gap) coupling. Must be > 0.
+  double thickness = 0.5;
+  //! Iteration cap per frame (>= 1).
+  int max_iterations = 500;
+  //! A frame stops once the relative energy change of one iteration, (E_prev − E)/E_prev, is at most
+  //! this. 0 runs exactly max_iterations iterations.
+  double tolerance = 1e-7;
+};
+
+//! PriMo with a local/global optimisation. Unknowns: one rigid motion per prism, x = R_f (q − c_f) + g_f
+//! (c_f the rest centroid of face f, g_f its new position). Energy (Botsch et al. 2006, eq. 1–2):
+//!   E = Σ_{edges e = f|j} w_e ∫∫_{[0,1]²} |x_f(e, u, v) − x_j(e, u, v)|² du dv,   w_e = |e|² / (A_f + A_j),
+//! where x_f(e, ·) is prism f's copy of the bilinear side face over e. The integrand is biquadratic, so a
+//! 2×2 Gauss rule is exact: E = Σ_e (w_e / 4) Σ_{m=1..4} |x_f(q_m) − x_j(q_m)|² with q_m the four Gauss
+//! points of the rest side face (both prisms share it at rest, so E(rest) = 0).
+//! Faces whose three vertices are all fixed or handle vertices are prisms with a fixed rigid motion (the
+//! best rigid fit of their rest triangle to its targets). One iteration, instead of the paper's
+//! hierarchical Newton solver:
+//!   1. local: the rotations R_f of the free prisms, one face colour at a time (no two faces of a colour
+//!      share an edge, so each is an exact block minimisation, in parallel): a weighted Kabsch fit of
+//!      the prism's Gauss points to its neighbours' current copies of them, g_f held;
+//!   2. global: all g_f at once for the current rotations: a weighted graph Laplacian over faces with the
+//!      constrained prisms as known values, factored once in prepare(); one back-substitution, 3 columns.
+//! Both steps minimise E exactly over their block, so E never increases. The vertices are the mean of the
+//! incident prisms' copies of them; constrained vertices are placed exactly.
+class PrimoDeformer : public Deformer {
+ public:
+  //! \throw InvalidInput for a thickness that is not finite and > 0, max_iterations < 1 or a tolerance
+  //! that is negative or not finite.
+  explicit PrimoDeformer(PrimoOptions options = {});
+  const std::string& name() const override { return name_; }
+  //! Surface, iterative, exact constraints, reproduces rigid motions, takes an initial guess (each prism
+  //! fitted to the guess's faces), no per-vertex targets.
+  DeformerTraits traits() const override;
+  const PrimoOptions& options() const { return options_; }
+
+  //! The energy E after each iteration of the last frame, preceded by the energy of its starting state
+  //! (iterations + 1 values; empty before the first frame).
+  const std::vector<double>& energy_history() const { return energies_; }
+  //! Prism thickness in mesh units (thickness × mean edge length), after prepare().
+  double prism_height() const { return height_; }
+
+ protected:
+  //! \throw TopologyError when no face has all three vertices constrained, or a group of free faces is
+  //! not coupled through edges to a constrained face (its rigid motion would be undetermined).
+  void do_prepare(const Positions& P, const Faces& F, const Region& region) override;
+  void do_deform(const std::vector<Mat4>& transforms, Positions& out) override;
+  void do_set_initial_guess(const Positions& X) override;
+  void do_reset() override;
+
+ private:
+  struct Edge {
+    int a, b;      // vertices of the shared edge
+    int f, j;      // the two faces
+    double w;      // w_e / 4 (the Gauss weight folded in)
+  };
+  Vec3 gauss_point(const Edge& e, int m) const;
+  double energy();
+  void prepare_newton();
+  bool newton_step(double energy_now, double& energy_after);
+  void fit_constrained(const Positions& targets);
+  void rest_state();
+
+  std::string name_ = "primo";
+  PrimoOptions options_;
+  Positions rest_, normals_;
+  Faces faces_;
+  double height_ = 0;
+  double energy_floor_ = 0;
+  std::vector<Edge> edges_;
+  std::vector<int> face_edge_offsets_, face_edges_;      // CSR: edges of each face
+  std::vector<int> vertex_face_offsets_, vertex_faces_;  // CSR: faces of each vertex
+  std::vector<int> constrained_faces_, constrained_, constrained_index_, handle_of_;
+  std::vector<char> face_is_constrained_;
+  std::vector<Vec3> centroids_;
+  // State: rotation and position per prism; warm-started between frames.
+  std::vector<Mat3> rotation_;
+  std::vector<Vec3> position_;
+  // Gauss-Newton on the free prisms' rigid motions: 6 unknowns (ω, δ) per free face.
+  std::vector<int> free_faces_, free_index_;  // free face list; face → its index in it (−1: constrained)
+  SparseMatrix hessian_;                      // lower triangle, fixed pattern
+  std::vector<int> diag_entry_, edge_entry_;  // first entry id of each free face's / free edge's block
+  std::vector<int> entry_position_;           // entry id → index into hessian_.valuePtr()
+  std::vector<double> diagonal_;              // undamped diagonal of the last assembly
+  Eigen::MatrixXd gradient_, step_;
+  SparseSPDSolver newton_solver_;
+  std::vector<Mat3> saved_rotation_;
+  std::vector<Vec3> saved_position_;
+  double damping_ = 1e-4;
+  // Frame workspace.
+  Positions targets_;
+  std::vector<Mat3> target_rotation_, start_rotation_;  // constrained faces: target and frame-start motions
+  std::vector<Vec3> target_position_, start_position_;
+  std::vector<double> chunk_energy_, energies_;
+};
+
+}  // namespace msd

@@ -139,10 +139,6 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
                                             {"spokes-and-rims", ArapEnergy::SpokesAndRims}},
           CLI::ignore_case))
       ->default_str("spokes"));
-  auto* primo = cmd.add_option_group("primo", "primo: coupled rigid prisms (9.8)");
-  primo->add_option("--thickness", settings.primo.thickness, "prism thickness relative to the mean edge length (> 0)")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
   auto* ms = cmd.add_option_group("multiscale", "multiscale: decompose, deform the base, add the details back (9.3)");
   decomposition.add_to(*ms);
   std::vector<std::string> single_scale;

@@ -181,20 +181,3 @@ TEST_CASE("primo: constraints act through whole faces, and a region without them
   REQUIRE(d.prepare_warnings().size() == 1);
   CHECK_THAT(d.prepare_warnings()[0], Contains("handle 0"));
 }
-
-TEST_CASE("primo debug", "[.primodebug]") {
-  for (const std::string name : {"bend120", "twist135"}) {
-  const Scene s = scene(name);
-  PrimoOptions o;
-  o.max_iterations = 500;
-  PrimoDeformer d(o);
-  d.prepare(s.P, s.F, s.region);
-  const Positions out = d.deform(s.transforms);
-  const std::vector<double>& E = d.energy_history();
-  for (size_t i = 0; i < E.size(); ++i) printf("%s %zu %.10e\n", name.c_str(), i, E[i]);
-  std::vector<std::pair<int,int>> pairs;
-  printf("final %.10e rigidity %g pairs %d iters %d\n", E.back(), rigidity_error(s.P, out, s.F).stats.mean, count_self_intersections(out, s.F, &pairs), d.frame_report().iterations);
-  for (size_t i = 0; i < pairs.size() && i < 6; ++i) printf("pair %d %d at x %g / %g\n", pairs[i].first, pairs[i].second, s.P(s.F(pairs[i].first,0),0), s.P(s.F(pairs[i].second,0),0));
-  ShellDeformer sh; sh.prepare(s.P, s.F, s.region); printf("shell pairs %d\n", count_self_intersections(sh.deform(s.transforms), s.F));
-  }
-}

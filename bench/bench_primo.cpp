@@ -1,9 +1,12 @@
 // PriMo (seed 9.8) on the bumpy plane bent by 120°: prepare time (edges, colouring, factorisation of the
 // face Laplacian), then one frame from rest to the default tolerance (iterations, time per iteration).
-// Usage: bench_primo [resolution ...]             (default: 100k 1M)
-//        bench_primo survey SURVEY_DIR [CGAL_DIR]  quality on the survey edits (plane, cylinder, bar, cactus)
-//                                                  and CGAL's cactus: iterations, time, rigidity, handle
-//                                                  error, self-intersecting face pairs
+// Usage: bench_primo [resolution ...]                    (default: 100k 1M)
+//        bench_primo quality MESH SEL DEF [THICKNESS ...]  one frame from rest per thickness (default 0.5):
+//                                                         iterations, time, rigidity mean/p95 (analysis
+//                                                         RigidityMetric), handle error, self-intersecting
+//                                                         face pairs
+//        bench_primo survey SURVEY_DIR [CGAL_DIR [THICKNESS]]  the same on the survey edits (plane,
+//                                                         cylinder, bar, cactus) and CGAL's cactus
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -20,7 +23,13 @@ using namespace msd::bench;
 
 namespace {
 
-double thickness = 0.5;
+double thickness = msd::PrimoOptions{}.thickness;
+
+void header() {
+  std::printf("%-14s %8s %9s %10s %6s %9s %10s %10s %9s %9s %9s %10s %6s\n", "edit", "vertices", "thickness",
+              "prepare[ms]", "iters", "converged", "residual", "frame[ms]", "iter[ms]", "rig.mean", "rig.p95",
+              "handle err", "pairs");
+}
 
 void quality(const std::string& name, const msd::EditCase& c) {
   msd::PrimoOptions o;
@@ -33,12 +42,12 @@ void quality(const std::string& name, const msd::EditCase& c) {
   const msd::Positions out = d.deform(c.transforms);
   const double frame = ms_since(t0);
   const msd::FrameReport& r = d.frame_report();
-  const double rigidity = msd::rigidity_error(c.P, out, c.F).stats.mean;
+  const msd::RigidityError rigidity = msd::RigidityMetric(c.P, c.F).measure(out);
   const double handle = msd::handle_error(c.P, out, c.region, c.transforms);
   const int pairs = msd::count_self_intersections(out, c.F);
-  std::printf("%-14s %8ld %10.1f %6d %9s %10.2e %10.1f %9.2f %10.5f %10.2e %6d\n", name.c_str(), long(c.P.rows()),
-              prepare, r.iterations, r.converged ? "yes" : "no", r.residual, frame, frame / std::max(1, r.iterations),
-              rigidity, handle, pairs);
+  std::printf("%-14s %8ld %9.3g %10.1f %6d %9s %10.2e %10.1f %9.2f %9.5f %9.5f %10.2e %6d\n", name.c_str(),
+              long(c.P.rows()), thickness, prepare, r.iterations, r.converged ? "yes" : "no", r.residual, frame,
+              frame / std::max(1, r.iterations), rigidity.stats.mean, rigidity.stats.p95, handle, pairs);
   std::fflush(stdout);
 }
 
@@ -46,11 +55,22 @@ void quality(const std::string& name, const msd::EditCase& c) {
 
 int main(int argc, char** argv) {
   msd::retain_freed_memory();
+  if (argc >= 5 && std::string(argv[1]) == "quality") {
+    const msd::EditCase c = msd::file_case(argv[2], argv[3], argv[4]);
+    header();
+    std::vector<double> thicknesses;
+    for (int i = 5; i < argc; ++i) thicknesses.push_back(std::stod(argv[i]));
+    if (thicknesses.empty()) thicknesses.push_back(thickness);
+    for (double t : thicknesses) {
+      thickness = t;
+      quality(argv[2], c);
+    }
+    return 0;
+  }
   if (argc >= 3 && std::string(argv[1]) == "survey") {
     const std::string dir = argv[2];
     if (argc >= 5) thickness = std::stod(argv[4]);
-    std::printf("%-14s %8s %10s %6s %9s %10s %10s %9s %10s %10s %6s\n", "edit", "vertices", "prepare[ms]", "iters",
-                "converged", "residual", "frame[ms]", "iter[ms]", "rigidity", "handle err", "pairs");
+    header();
     for (const char* name : {"plane", "cylinder", "bar", "cactus"})
       quality(name, msd::file_case(dir + "/" + name + ".off", dir + "/" + name + ".sel", dir + "/" + name + ".def"));
     if (argc >= 4) {

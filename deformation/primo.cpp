@@ -20,6 +20,21 @@ const double kGaussOffset = 0.5 / std::sqrt(3.0);
 
 constexpr long kEnergyChunk = 8192;
 
+// Stopping tolerance of the intermediate continuation stages, in bounding-box diagonals.
+constexpr double kStageTolerance = 1e-4;
+
+// Marquardt damping μ of (JᵀJ + μ·diag(JᵀJ)): small, because the normal matrix is Laplacian-like: its
+// smooth modes (a translation carried along a bar) have eigenvalues ~1e-4–1e-6 of the diagonal, and
+// μ = 1e-4 damped them so much that a pure translation took ~100 iterations and the prisms twisted on the
+// way. μ grows ×10 per rejected step (up to kMaxAttempts) and shrinks ÷3 per accepted one.
+constexpr double kInitialDamping = 1e-8, kMinDamping = 1e-12;
+constexpr int kMaxAttempts = 14;
+// The first shift of an indefinite exact Hessian, and the largest before Gauss-Newton takes over.
+constexpr double kIndefiniteDamping = 1e-3, kMaxExactDamping = 1.0;
+// Line search: halvings of the step per damping, and the largest prism turn of a first trial (radians).
+constexpr int kLineSearchTrials = 6;
+constexpr double kMaxTurn = 0.5;
+
 }  // namespace
 
 PrimoDeformer::PrimoDeformer(PrimoOptions options) : options_(options) {
@@ -163,6 +178,8 @@ void PrimoDeformer::do_prepare(const Positions& P, const Faces& F, const Region&
   for (const Edge& e : edges_) weight_sum += e.w;
   const double size = (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm() + height_;
   energy_floor_ = 1e-26 * weight_sum * size * size;
+  diagonal_length_ = bounding_box_diagonal(P);
+  if (!(diagonal_length_ > 0)) throw InvalidInput("primo: the mesh has a zero bounding-box diagonal (all vertices coincide)");
 
   rotation_.resize(nf);
   position_.resize(nf);
@@ -271,7 +288,7 @@ void PrimoDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
   int iterations = 0;
   double change = 0;
   bool converged = false;
-  damping_ = 1e-4;
+  damping_ = kInitialDamping;
   for (int stage = 1; stage <= stages; ++stage) {
     const double t = static_cast<double>(stage) / stages;
     const bool last = stage == stages;
@@ -283,23 +300,30 @@ void PrimoDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
                           : Mat3(start_rotation_[i] * Eigen::AngleAxisd(t * turn.angle(), turn.axis()).toRotationMatrix());
       position_[f] = last ? target_position_[i] : Vec3((1 - t) * start_position_[i] + t * target_position_[i]);
     }
-    // Intermediate stages only need a nearby start for the next one.
-    const double tolerance = last ? options_.tolerance : std::max(options_.tolerance, 1e-3);
+    // Intermediate stages only need a nearby start for the next one. The test is on the step (the largest
+    // move of a prism corner, in bounding-box diagonals), not on the relative energy change: near a rigid
+    // motion E → 0 and its relative change is round-off, while the shape can still be far from converged.
+    const double tolerance = (last ? options_.tolerance : std::max(options_.tolerance, kStageTolerance)) * diagonal_length_;
     double e_prev = energy();
     if (last) {
       energies_.clear();
       energies_.push_back(e_prev);
     }
+    // An intermediate stage gets at most max_iterations / (2 · stages) iterations, so the last one (the
+    // target constraints) always has at least half of them.
+    const int stage_cap = last ? options_.max_iterations - iterations
+                               : std::max(1, options_.max_iterations / (2 * stages));
     int stage_iterations = 0;
-    while (iterations < options_.max_iterations) {
-      double e = e_prev;
-      if (!newton_step(e_prev, e)) e = e_prev;  // no damping makes E decrease: a minimum to round-off
+    while (iterations < options_.max_iterations && stage_iterations < stage_cap) {
+      double e = e_prev, step = 0;
+      const bool moved = newton_step(e_prev, e, step);  // E and the state are kept when no step lowers E
       ++iterations;
       ++stage_iterations;
       if (last) energies_.push_back(e);
-      change = e_prev > 0 ? std::max(0.0, e_prev - e) / e_prev : 0.0;
+      change = step / diagonal_length_;
       e_prev = e;
-      if (e <= energy_floor_ || (tolerance > 0 && change <= tolerance)) {
+      // A step no damping can make lower E, or E at the round-off floor of a rigid motion: a minimum.
+      if (tolerance > 0 && (!moved || e <= energy_floor_ || step <= tolerance)) {
         converged = true;
         break;
       }
@@ -391,15 +415,38 @@ void PrimoDeformer::prepare_newton() {
   diagonal_.assign(6 * n, 0.0);
   gradient_.resize(6 * n, 1);
   step_.resize(6 * n, 1);
+  move_.assign(n, 0.0);
+  rotation_block_.resize(n);
+  second_order_.resize(n);
   newton_solver_ = SparseSPDSolver();
   saved_rotation_.resize(nf);
   saved_position_.resize(nf);
 }
 
+void PrimoDeformer::apply_step(double alpha) {
+  parallel_for_chunks(static_cast<long>(free_faces_.size()), [&](long b, long e) {
+    for (long I = b; I < e; ++I) {
+      const int f = free_faces_[I];
+      const Vec3 w = alpha * step_.middleRows<3>(6 * I);
+      const double angle = w.norm();
+      rotation_[f] = angle > 0 ? Mat3(Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * saved_rotation_[f])
+                               : saved_rotation_[f];
+      position_[f] = saved_position_[f] + alpha * step_.middleRows<3>(6 * I + 3);
+      // The step's largest move of the prism's copies of its face's vertices (squared).
+      double move = 0;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 r = rest_.row(faces_(f, k)).transpose() - centroids_[f];
+        move = std::max(move, ((rotation_[f] - saved_rotation_[f]) * r + position_[f] - saved_position_[f]).squaredNorm());
+      }
+      move_[I] = move;
+    }
+  }, 4096);
+}
+
 // One Levenberg–Marquardt step on E over the free prisms' motions x = exp([ω]×) R (q − c) + g + δ:
 // residuals d_m = x_f(q_m) − x_j(q_m), Jacobians J = [−[r]×, I] (r = R (q − c)), normal equations
 // (JᵀWJ + μ·diag(JᵀWJ)) ξ = −JᵀWd. Accepted only if E decreases; otherwise μ grows and the state is kept.
-bool PrimoDeformer::newton_step(double energy_now, double& energy_after) {
+bool PrimoDeformer::newton_step(double energy_now, double& energy_after, double& step_length) {
   const int n = static_cast<int>(free_faces_.size());
   double* values = hessian_.valuePtr();
   // Diagonal blocks and gradient, per free face.
@@ -408,6 +455,7 @@ bool PrimoDeformer::newton_step(double energy_now, double& energy_after) {
       const int f = free_faces_[I];
       Mat6 H = Mat6::Zero();
       Vec6 g = Vec6::Zero();
+      Mat3 second = Mat3::Zero();
       for (int k = face_edge_offsets_[f]; k < face_edge_offsets_[f + 1]; ++k) {
         const Edge& edge = edges_[face_edges_[k]];
         const int j = edge.f == f ? edge.j : edge.f;
@@ -419,6 +467,9 @@ bool PrimoDeformer::newton_step(double energy_now, double& energy_after) {
           H.topLeftCorner<3, 3>() += edge.w * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
           H.topRightCorner<3, 3>() += edge.w * S;
           H.bottomRightCorner<3, 3>().diagonal().array() += edge.w;
+          // The second-order term d·∇²d of the exact Hessian: exp([ω]×) r = r + ω×r + ½ ω×(ω×r) + …,
+          // so ∂²(½|d|²)/∂ω² gains sym(r dᵀ) − (r·d) I (only the rotation block of the own prism).
+          second += edge.w * (0.5 * (r * d.transpose() + d * r.transpose()) - r.dot(d) * Mat3::Identity());
           g.head<3>() += edge.w * r.cross(d);
           g.tail<3>() += edge.w * d;
         }
@@ -429,6 +480,8 @@ bool PrimoDeformer::newton_step(double energy_now, double& energy_after) {
         for (int r = c; r < 6; ++r) values[entry_position_[id++]] = H(r, c);
       for (int r = 0; r < 6; ++r) diagonal_[6 * I + r] = H(r, r);
       gradient_.middleRows<6>(6 * I) = -g;
+      rotation_block_[I] = H.topLeftCorner<3, 3>();
+      second_order_[I] = second;
     }
   }, 1024);
   // Off-diagonal blocks, per edge between free faces: −w Σ_m J_fᵀ J_j.
@@ -456,47 +509,63 @@ bool PrimoDeformer::newton_step(double energy_now, double& energy_after) {
   }, 4096);
   std::copy(rotation_.begin(), rotation_.end(), saved_rotation_.begin());
   std::copy(position_.begin(), position_.end(), saved_position_.begin());
-  for (int attempt = 0; attempt < 8; ++attempt) {
-    // Marquardt damping of the diagonal (a small floor keeps a zero-curvature direction solvable).
-    double mean_diagonal = 0;
-    for (double v : diagonal_) mean_diagonal += v;
-    mean_diagonal /= std::max<size_t>(diagonal_.size(), 1);
-    for (int I = 0; I < n; ++I) {
-      int id = diag_entry_[I];
-      for (int c = 0; c < 6; ++c)
-        for (int r = c; r < 6; ++r, ++id)
-          if (r == c) values[entry_position_[id]] = (1 + damping_) * diagonal_[6 * I + r] + 1e-12 * mean_diagonal;
-    }
+  // Newton first (the exact Hessian converges where Gauss-Newton crawls: the residuals of a stretched
+  // edit are not small); when that matrix is not positive definite, Gauss-Newton (JᵀJ is).
+  bool exact = true;
+  double mean_diagonal = 0;
+  for (double v : diagonal_) mean_diagonal += v;
+  mean_diagonal /= std::max<size_t>(diagonal_.size(), 1);
+  for (int attempt = 0; attempt < kMaxAttempts; ++attempt) {
+    // Rotation blocks (exact or Gauss-Newton) and Marquardt damping μ·diag(JᵀJ) of the diagonal (a small
+    // floor keeps a zero-curvature direction solvable).
+    parallel_for_chunks(n, [&](long b, long e) {
+      for (long I = b; I < e; ++I) {
+        int id = diag_entry_[I];
+        for (int c = 0; c < 6; ++c)
+          for (int r = c; r < 6; ++r, ++id) {
+            if (r < 3) values[entry_position_[id]] = rotation_block_[I](r, c) + (exact ? second_order_[I](r, c) : 0.0);
+            if (r == c)
+              values[entry_position_[id]] = (r < 3 ? values[entry_position_[id]] : diagonal_[6 * I + r]) +
+                                            damping_ * diagonal_[6 * I + r] + 1e-12 * mean_diagonal;
+          }
+      }
+    }, 4096);
     try {
       if (newton_solver_.factored())
         newton_solver_.refactor(hessian_);
       else
         newton_solver_.factor(hessian_);
     } catch (const SolverError&) {
-      damping_ *= 10;
+      // Not positive definite: shift the exact Hessian by μ·diag(JᵀJ) until it is (a buckling edit crosses
+      // regions of negative curvature, where Gauss-Newton crawls), and fall back to Gauss-Newton once the
+      // shift dominates.
+      damping_ = std::max(10 * damping_, kIndefiniteDamping);
+      if (exact && damping_ > kMaxExactDamping) exact = false, damping_ = kInitialDamping;
       continue;
     }
     newton_solver_.solve(gradient_, step_);
-    parallel_for_chunks(n, [&](long b, long e) {
-      for (long I = b; I < e; ++I) {
-        const int f = free_faces_[I];
-        const Vec3 w = step_.middleRows<3>(6 * I);
-        const double angle = w.norm();
-        rotation_[f] = angle > 0 ? Mat3(Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * saved_rotation_[f])
-                                 : saved_rotation_[f];
-        position_[f] = saved_position_[f] + step_.middleRows<3>(6 * I + 3);
+    // Backtracking along the Gauss-Newton direction: a line search costs energy evaluations only, a
+    // larger damping a refactorisation. The first trial turns no prism by more than kMaxTurn.
+    double largest_turn = 0;
+    for (int I = 0; I < n; ++I) largest_turn = std::max(largest_turn, step_.middleRows<3>(6 * I).norm());
+    double alpha = largest_turn > kMaxTurn ? kMaxTurn / largest_turn : 1.0;
+    for (int trial = 0; trial < kLineSearchTrials; ++trial, alpha *= 0.5) {
+      apply_step(alpha);
+      energy_after = energy();
+      if (energy_after <= energy_now) {
+        if (trial == 0) damping_ = std::max(damping_ / 3, kMinDamping);
+        double move = 0;
+        for (double m : move_) move = std::max(move, m);
+        step_length = std::sqrt(move);
+        return true;
       }
-    }, 4096);
-    energy_after = energy();
-    if (energy_after <= energy_now) {
-      damping_ = std::max(damping_ / 3, 1e-9);
-      return true;
     }
     damping_ *= 10;
     std::copy(saved_rotation_.begin(), saved_rotation_.end(), rotation_.begin());
     std::copy(saved_position_.begin(), saved_position_.end(), position_.begin());
   }
   energy_after = energy_now;
+  step_length = 0;
   return false;
 }
 

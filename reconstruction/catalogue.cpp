@@ -46,6 +46,8 @@ Catalogue make_builtin() {
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<LaplacianEditing>(s.laplacian); }});
   c.add({"arap", "9.8", "as-rigid-as-possible (Sorkine & Alexa 2007): local rotations and a global solve factored once, warm-started",
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<ArapDeformer>(s.arap); }});
+  c.add({"primo", "9.8", "PriMo (Botsch et al. 2006): a rigid prism per face, coupled across shared edges; Levenberg-Marquardt on the prisms' motions",
+         [](const MethodSettings& s, const Catalogue&) { return std::make_unique<PrimoDeformer>(s.primo); }});
   for (const std::string& encoding : encoding_names())
     c.add({"multiscale-" + encoding, "9.3",
            "multi-scale: decompose S = B ⊕ D, deform B with the base method, add the " + encoding + " details back",

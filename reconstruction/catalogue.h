@@ -13,6 +13,7 @@
 #include "deformation/deformer.h"
 #include "deformation/gradient_editing.h"
 #include "deformation/laplacian_editing.h"
+#include "deformation/primo.h"
 #include "deformation/propagation.h"
 #include "deformation/shell.h"
 #include "reconstruction/multiscale.h"
@@ -25,6 +26,7 @@ struct MethodSettings {
   PropagationOptions propagation;      //!< propagate
   LaplacianEditingOptions laplacian;   //!< laplacian
   ArapOptions arap;                    //!< arap
+  PrimoOptions primo;                  //!< primo
   DecompositionOptions decomposition;  //!< multiscale-*: how S is split into B and details
   EncodingOptions encoding;            //!< multiscale-*: the encodings' options (the kind comes from the name)
   //! multiscale-*: the catalogue method that deforms the base (any single-scale row).

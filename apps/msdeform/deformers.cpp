@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
+#include <sstream>
 
 #include "core/errors.h"
 
@@ -13,6 +14,12 @@ std::string joined(const std::vector<std::string>& names, const char* sep) {
   std::string out;
   for (const auto& n : names) out += (out.empty() ? "" : sep) + n;
   return out;
+}
+// A default value for help text: 1e-06, 1000.
+std::string compact(double x) {
+  std::ostringstream out;
+  out << x;
+  return out.str();
 }
 }  // namespace
 
@@ -118,16 +125,21 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   laplacian->add_flag("--laplacian-explicit{false}", settings.laplacian.implicit,
                       "explicit variant: δ'_i = M_i δ_i with M_i propagated from the handles (9.4.3) instead of "
                       "the implicit linearised similarities (9.11)");
-  auto* iterative = cmd.add_option_group("iterative methods", "arap: iterations per frame and stopping test");
-  arap_options = {};
-  arap_options.push_back(iterative->add_option("--iterations", settings.arap.max_iterations, "iterations per frame at most")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str());
-  arap_options.push_back(iterative->add_option("--tolerance", settings.arap.tolerance,
-                        "stop when one iteration moves no vertex by more than this fraction of the bounding-box "
-                        "diagonal; 0: exactly --iterations")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str());
+  // One pair of options for both iterative methods: bound to DeformerOptions and copied into the chosen
+  // method's settings by method_settings() (their defaults differ per method).
+  auto* iterative = cmd.add_option_group("iterative methods", "arap, primo: iterations per frame and stopping test");
+  iterative_options = {};
+  iterative_options.push_back(
+      iterative->add_option("--iterations", iterations,
+                            "iterations per frame at most (default: arap " + std::to_string(ArapOptions{}.max_iterations) +
+                                ", primo " + std::to_string(PrimoOptions{}.max_iterations) + ")")
+          ->check(CLI::PositiveNumber));
+  iterative_options.push_back(
+      iterative->add_option("--tolerance", tolerance,
+                            "stop when one iteration moves no vertex (arap) or no prism corner (primo) by more than "
+                            "this fraction of the bounding-box diagonal; 0: exactly --iterations (default: arap " +
+                                compact(ArapOptions{}.tolerance) + ", primo " + compact(PrimoOptions{}.tolerance) + ")")
+          ->check(CLI::NonNegativeNumber));
   auto* arap = cmd.add_option_group("arap", "arap: as-rigid-as-possible (9.8)");
   arap_options.push_back(arap->add_option("--anderson", settings.arap.anderson,
                    "Anderson acceleration window (Peng et al. 2018), 0: plain local/global")
@@ -139,6 +151,13 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
                                             {"spokes-and-rims", ArapEnergy::SpokesAndRims}},
           CLI::ignore_case))
       ->default_str("spokes"));
+  auto* primo = cmd.add_option_group("primo", "primo: coupled rigid prisms, Botsch et al. 2006 (9.8)");
+  primo_options = {};
+  primo_options.push_back(primo->add_option("--prism-thickness", settings.primo.thickness,
+                                            "prism height relative to the mean edge length (> 0); thicker prisms "
+                                            "resist bending more")
+                              ->check(CLI::PositiveNumber)
+                              ->capture_default_str());
   auto* ms = cmd.add_option_group("multiscale", "multiscale: decompose, deform the base, add the details back (9.3)");
   decomposition.add_to(*ms);
   std::vector<std::string> single_scale;
@@ -154,10 +173,18 @@ std::string DeformerOptions::method_name() const {
   if (!multiscale && (decomposition.given() || (base_method_option && base_method_option->count() > 0)))
     throw InvalidInput("--base, --detail-scale, --fairing, --remesh-base and --base-method apply to --method "
                        "multiscale; --method " + method + " has no base to decompose");
-  const bool arap = method == "arap" || (multiscale && settings.base_method == "arap");
+  const auto uses = [&](const std::string& m) { return method == m || (multiscale && settings.base_method == m); };
+  for (const CLI::Option* o : iterative_options)
+    if (o->count() > 0 && !uses("arap") && !uses("primo"))
+      throw InvalidInput(o->get_name() + " applies to the iterative methods arap and primo (or multiscale with "
+                         "--base-method arap or primo), not --method " + method);
   for (const CLI::Option* o : arap_options)
-    if (o->count() > 0 && !arap)
+    if (o->count() > 0 && !uses("arap"))
       throw InvalidInput(o->get_name() + " applies to --method arap (or multiscale with --base-method arap), not --method " +
+                         method);
+  for (const CLI::Option* o : primo_options)
+    if (o->count() > 0 && !uses("primo"))
+      throw InvalidInput(o->get_name() + " applies to --method primo (or multiscale with --base-method primo), not --method " +
                          method);
   if (method == "multiscale") return "multiscale-" + encoding;
   if (encoding_option && encoding_option->count() > 0)
@@ -168,6 +195,9 @@ std::string DeformerOptions::method_name() const {
 
 MethodSettings DeformerOptions::method_settings(const EditCase& edit) const {
   MethodSettings s = settings;
+  if (iterative_options.size() == 2 && iterative_options[0]->count() > 0)
+    s.arap.max_iterations = s.primo.max_iterations = iterations;
+  if (iterative_options.size() == 2 && iterative_options[1]->count() > 0) s.arap.tolerance = s.primo.tolerance = tolerance;
   s.decomposition = decomposition.resolve(edit);
   return s;
 }

@@ -39,7 +39,11 @@ struct DeformerOptions {
   std::string encoding = "normal";
   CLI::Option* encoding_option = nullptr;  // set by add_to(): whether --encoding was given
   CLI::Option* base_method_option = nullptr;
-  std::vector<CLI::Option*> arap_options;  // --iterations, --tolerance, --anderson, --arap-energy
+  std::vector<CLI::Option*> iterative_options;  // --iterations, --tolerance (arap and primo)
+  std::vector<CLI::Option*> arap_options;       // --anderson, --arap-energy
+  std::vector<CLI::Option*> primo_options;      // --prism-thickness
+  int iterations = 0;                           // --iterations, copied into the method's settings when given
+  double tolerance = 0;                         // --tolerance, likewise
   MethodSettings settings;
   DecompositionArgs decomposition;
   // --method, --encoding and add_settings().

@@ -224,7 +224,7 @@ void ArapDeformer::fit_rotation(long i, const Mat3& A) {
   if (!(scale > 0)) return;  // an empty cell: every rotation fits; keep the last one
   Eigen::Quaterniond q(quaternion_[i][3], quaternion_[i][0], quaternion_[i][1], quaternion_[i][2]);
   Mat3 R = rotation_[i];
-  bool newton = true;
+  bool newton = true, at_optimum = false;
   for (int it = 0; it < kFitIterations && newton; ++it) {
     // Newton step on f(δ) = tr((R exp[δ]×)ᵀ A) in the body frame: with M = Rᵀ A, gradient 2m
     // (skew(M) = [m]×) and Hessian −(tr M · I − sym M) = −K. K is solved in closed form (adjugate)
@@ -246,8 +246,12 @@ void ArapDeformer::fit_rotation(long i, const Mat3& A) {
     q.normalize();
     R = q.toRotationMatrix();
     // Newton converges quadratically: after a step of |δ|² < kFitAngle the error is below kFitAngle.
-    if (delta.squaredNorm() < kFitAngle) break;
+    if (delta.squaredNorm() < kFitAngle) {
+      at_optimum = it == 0;  // the last rotation already fitted
+      break;
+    }
   }
+  if (!(alignment(R, A) >= f0) && newton && at_optimum) return;  // round-off: keep the last rotation
   // A fit that did not raise tr(Rᵀ A) (Newton not applicable, far from the optimum, or not finite): the
   // exact fit. Either way the energy never increases.
   if (!newton || !(alignment(R, A) >= f0)) {

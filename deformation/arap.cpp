@@ -200,7 +200,7 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
   x_unknown_.resize(unknown_.size(), 3);
   targets_.resize(constrained_.size(), 3);
   energies_.clear();
-  energies_.reserve(options_.max_iterations + 1);
+  energies_.reserve(std::min(options_.max_iterations, 100000) + 1);  // beyond that a frame may allocate
   const long n = 3 * static_cast<long>(unknown_.size());
   u_.resize(n), warm_.resize(n), f_.resize(n), f_previous_.resize(n), g_previous_.resize(n);
   const int m = std::max(options_.anderson, 1);

@@ -192,7 +192,7 @@ void PrimoDeformer::do_prepare(const Positions& P, const Faces& F, const Region&
   start_position_.resize(constrained_faces_.size());
   chunk_energy_.assign((edges_.size() + kEnergyChunk - 1) / kEnergyChunk, 0.0);
   energies_.clear();
-  energies_.reserve(options_.max_iterations + 1);
+  energies_.reserve(std::min(options_.max_iterations, 100000) + 1);  // beyond that a frame may allocate
 }
 
 void PrimoDeformer::rest_state() {

@@ -53,9 +53,8 @@ struct SceneOutput {
 std::string caption(const MethodResult& r) {
   if (!r.ok) return "failed";
   char text[200];
-  std::snprintf(text, sizeof text, "rigidity %.3g, distortion %.3g, pairs %d", r.rigidity.mean, r.distortion.mean,
-                r.self_intersections);
-  std::string out = text;
+  std::snprintf(text, sizeof text, "rigidity %.3g, distortion %.3g, pairs ", r.rigidity.mean, r.distortion.mean);
+  std::string out = text + (r.self_intersections < 0 ? std::string("n/a") : std::to_string(r.self_intersections));
   if (r.reference) {
     std::snprintf(text, sizeof text, ", to reference %.3g (mean %.3g)", r.reference->max, r.reference->mean);
     out += text;
@@ -77,14 +76,15 @@ constexpr Figure916 kFigure916[] = {
 constexpr std::array<std::pair<const char*, const char*>, 7> kFigure916Rows = {{
     {"primo", "PriMo (nonlinear reference)"},
     {"arap", "ARAP (nonlinear)"},
-    {"multiscale", "shell + multi-scale (best encoding)"},
+    {"multiscale", ""},  // named after the base method
     {"gradient", "gradient-based editing"},
     {"laplacian", "Laplacian editing"},
     {"propagate", "transformation propagation"},
     {"shell", "shell"},
 }};
 
-std::string figure916_html(const std::vector<MethodResult>& results) {
+std::string figure916_html(const std::vector<MethodResult>& results, const std::string& reference,
+                           const std::string& base_method) {
   auto find = [&](const std::string& scene, const std::string& method) -> const MethodResult* {
     if (method == "multiscale") return best_multiscale(results, scene);
     for (const MethodResult& r : results)
@@ -113,18 +113,26 @@ std::string figure916_html(const std::vector<MethodResult>& results) {
         }
         row << "</td>";
       }
-      if (any) h << "<tr><th>" << label << "</th>" << row.str() << "</tr>\n";
+      std::string name = label;
+      if (std::string(method) == "multiscale") name = base_method + " + multi-scale (best encoding)";
+      if (method == reference) name += " = reference";
+      if (any) h << "<tr><th>" << html_escape(name) << "</th>" << row.str() << "</tr>\n";
     }
     h << "</table>\n";
   }
   if (h.str().empty()) return "";
+  const std::string measure =
+      reference.empty() ? std::string("no reference method was run (--reference).")
+                        : "\"to reference\" is the largest (and mean) vertex distance to " + html_escape(reference) +
+                              "'s result over the bounding-box diagonal; the multi-scale row shows the encoding "
+                              "closest to it.";
   return "<h2>Fig. 9.16: which method suits which edit</h2>\n<p>Rows as in the seed's Fig. 9.16, columns its three "
-         "edits; \"to reference\" is the largest (and mean) vertex distance to the reference method's result over "
-         "the bounding-box diagonal.</p>\n" + h.str();
+         "edits; " + measure + "</p>\n" + h.str();
 }
 
 std::string index_html(const std::vector<MethodResult>& results, const std::vector<SceneOutput>& scenes,
-                       const std::vector<std::string>& methods) {
+                       const std::vector<std::string>& methods, const std::string& reference,
+                       const std::string& base_method) {
   std::ostringstream h;
   h << "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>msdeform comparison</title>\n"
        "<style>body{font-family:sans-serif;margin:1.5em}table{border-collapse:collapse;font-size:13px}"
@@ -135,7 +143,7 @@ std::string index_html(const std::vector<MethodResult>& results, const std::vect
        "<p>Colour: change of the detail heights (normal displacements over a faired base, seed 9.3) against "
        "the input; one camera per scene. Files: <a href=\"metrics.csv\">metrics.csv</a>, "
        "<a href=\"metrics.md\">metrics.md</a>, <a href=\"contact_sheet.png\">contact_sheet.png</a>, meshes/.</p>\n";
-  h << figure916_html(results);
+  h << figure916_html(results, reference, base_method);
   h << "<h2>All pictures</h2>\n<table class=\"grid\"><tr><th></th>";
   for (const auto& s : scenes) h << "<th>" << html_escape(s.name) << "</th>";
   h << "</tr>\n";
@@ -186,7 +194,7 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("--sel", a->sel, "Region of --mesh (.sel or .dmat)");
   cmd->add_option("--def", a->def, "Handle transforms of --mesh (.def)");
   cmd->add_option("--survey", a->survey,
-                  "Also run the Botsch-Sorkine benchmark edits from this folder (seed Fig. 9.16): plane (translation), "
+                  "Run the Botsch-Sorkine benchmark edits from this folder (with the built-in scenes only when --scenes names them) (seed Fig. 9.16): plane (translation), "
                   "cylinder (120 degree bend), bar (135 degree twist) and cactus, each NAME.off/.sel/.def");
   cmd->add_option("--reference", a->reference,
                   "Method whose result the others are measured against (distance columns; default: the first of "
@@ -300,7 +308,7 @@ void add_compare_command(CLI::App& app) {
     write_png(tile_images(tiles, static_cast<int>(scene_outputs.size()), tile_labels), (out / "contact_sheet.png").string());
     write_file_atomically((out / "metrics.csv").string(), metrics_csv(all));
     write_file_atomically((out / "metrics.md").string(), metrics_markdown(all));
-    write_file_atomically((out / "index.html").string(), index_html(all, scene_outputs, options.methods));
+    write_file_atomically((out / "index.html").string(), index_html(all, scene_outputs, options.methods, options.reference, a->method.settings.base_method));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     int failed = 0;
     for (const auto& r : all) failed += !r.ok;

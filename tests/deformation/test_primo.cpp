@@ -21,16 +21,6 @@ Scene scene(const std::string& name, int resolution = 600) {
   return make_scene(name, o);
 }
 
-double constraint_error(const Positions& rest, const Positions& out, const Region& region, const std::vector<Mat4>& T) {
-  double err = 0;
-  for (int v : region.constrained_vertices()) {
-    const int k = region.handle_of(v);
-    const Vec3 target = k < 0 ? Vec3(rest.row(v)) : transform_point(T[k], rest.row(v));
-    err = std::max(err, (Vec3(out.row(v)) - target).norm());
-  }
-  return err;
-}
-
 Mat4 rigid(const Vec3& axis, double angle, const Vec3& t) {
   Mat4 T = Mat4::Identity();
   T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
@@ -59,7 +49,7 @@ TEST_CASE("primo: constraints are met exactly and the frame report is filled", "
     PrimoDeformer d;
     d.prepare(s.P, s.F, s.region);
     const Positions out = d.deform(s.transforms);
-    CHECK(constraint_error(s.P, out, s.region, s.transforms) <= 1e-12 * diag);
+    CHECK(test::constraint_error(s.P, out, s.region, s.transforms) <= 1e-12 * diag);
     const FrameReport r = d.frame_report();
     CHECK(r.converged);
     CHECK(r.iterations >= 1);

@@ -37,26 +37,12 @@ void LaplacianEditing::do_prepare(const Positions& P, const Faces& F, const Regi
     prepare_implicit(P, F, region);
   else
     prepare_explicit(P, F, region);
-  const VertexAdjacency adjacency = vertex_adjacency(F, static_cast<int>(P.rows()));
-  free_edges_.clear();
-  free_edge_length_.clear();
-  for (int i = 0; i < adjacency.num_vertices(); ++i)
-    for (const int* j = adjacency.begin(i); j != adjacency.end(i); ++j) {
-      const double length = (P.row(i) - P.row(*j)).norm();
-      if (i < *j && (region.is_free(i) || region.is_free(*j)) && length > 0) {
-        free_edges_.emplace_back(i, *j);
-        free_edge_length_.push_back(length);
-      }
-    }
+  free_edges_ = FreeEdgeLengths(P, F, region);
 }
 
 void LaplacianEditing::check_scale(const Positions& out) {
-  if (free_edges_.empty()) return;
-  double sum = 0;  // Σ |log(ℓ'/ℓ)|; a collapsed edge counts as infinitely scaled
-  for (size_t e = 0; e < free_edges_.size(); ++e)
-    sum += std::abs(std::log((out.row(free_edges_[e].first) - out.row(free_edges_[e].second)).norm() /
-                             free_edge_length_[e]));
-  const double scale = std::exp(sum / static_cast<double>(free_edges_.size()));
+  if (free_edges_.edges.empty()) return;
+  const double scale = free_edges_.mean_scale(out);
   if (!(scale <= kMaxMeanScale))
     frame_report_.warnings.push_back(
         name_ + ": the edges around the free vertices changed length by a factor " + std::to_string(scale) +

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/edge_scale.h"
 #include "core/solver.h"
 #include "deformation/deformer.h"
 #include "deformation/local_transforms.h"
@@ -69,8 +70,7 @@ class LaplacianEditing : public Deformer {
   std::string name_ = "laplacian";
   static constexpr double kMaxMeanScale = 1.25;
   LaplacianEditingOptions options_;
-  std::vector<std::pair<int, int>> free_edges_;  // edges with a free end and non-zero length, for check_scale()
-  std::vector<double> free_edge_length_;         // their rest lengths
+  FreeEdgeLengths free_edges_;  // edges with a free end and their rest lengths, for check_scale()
   Positions rest_, delta_;
   ConstrainedQuadratic system_;
   KnownRowSolve frame_;

@@ -4,10 +4,9 @@
 // come from the figures measured on 2026-11-30 (in the comments), with margins.
 #include <catch2/catch.hpp>
 
-#include <cmath>
 
 #include "apps/compare/runner.h"
-#include "core/adjacency.h"
+#include "core/edge_scale.h"
 #include "golden.h"
 #include "test_util.h"
 
@@ -67,17 +66,7 @@ double edge_scale_change(const std::string& edit, const std::string& method) {
   for (const EditCase& e : figure().cases)
     if (e.name == edit) c = &e;
   REQUIRE(c);
-  const Positions& X = result(edit, method).result;
-  const auto rings = vertex_adjacency(c->F, static_cast<int>(c->P.rows()));
-  double sum = 0;
-  long count = 0;
-  for (int i = 0; i < rings.num_vertices(); ++i)
-    for (const int* j = rings.begin(i); j != rings.end(i); ++j)
-      if (*j > i && (c->region.is_free(i) || c->region.is_free(*j))) {
-        sum += std::abs(std::log((X.row(i) - X.row(*j)).norm() / (c->P.row(i) - c->P.row(*j)).norm()));
-        ++count;
-      }
-  return std::exp(sum / count);
+  return FreeEdgeLengths(c->P, c->F, c->region).mean_scale(result(edit, method).result);
 }
 
 }  // namespace

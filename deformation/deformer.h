@@ -130,9 +130,12 @@ class Deformer {
   FrameReport frame_report_;  //!< filled by the frame where the method measures something
   std::vector<std::string> prepare_warnings_;  //!< filled by do_prepare() (cleared before it)
 
- private:
+  //! Frame bracket for frames a subclass adds (e.g. control-point editing): checks prepared, sizes out,
+  //! clears the report / checks every position is finite and turns a non-convergence into a warning.
   void begin_frame(Positions& out);
   void end_frame(const Positions& out);
+
+ private:
   bool prepared_ = false;
   int num_handles_ = 0, num_vertices_ = 0, num_constrained_ = 0;
 };

@@ -1,0 +1,130 @@
+#pragma once
+//! \file Space deformations (seed 9.5–9.6) as one linear family: the displacement of any point x is
+//!   d(x) = Σ_l δc_l ψ_l(x),   l = 1..m,
+//! with the method's basis functions ψ_l (a lattice's tensor-product B-splines, a cage's generalised
+//! barycentric coordinates, or triharmonic kernels plus a linear polynomial) and coefficients δc (m×3)
+//! that depend linearly on the constraints d(p_i) = d̄_i at the fixed and handle vertices. Because the
+//! map from constraints to coefficients is linear, an affine frame is a fixed linear map of the handle
+//! transforms: prepare() precomputes per point and handle four numbers b_k(p) (the affine basis
+//! functions of Botsch & Kobbelt 2005), and a frame is
+//!   p' = p + Σ_k (T_k − I)₃ₓ₄ · b_k(p),
+//! 12 multiply-adds per point and handle, no solve and no allocation. Everything here needs neither
+//! faces nor a manifold: point clouds, polygon soups and multi-component meshes deform alike.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "deformation/deformer.h"
+
+namespace msd {
+
+//! One point's basis values ψ_l(x) as (index, value) pairs: sparse (a lattice's 64) or dense (a cage's m).
+struct BasisRow {
+  std::vector<int> index;
+  std::vector<double> value;
+  void clear() {
+    index.clear();
+    value.clear();
+  }
+  void add(int l, double w) {
+    index.push_back(l);
+    value.push_back(w);
+  }
+};
+
+//! How the free-form methods (lattice, cage) turn constraints into control displacements (seed eq. 9.13).
+struct LeastNormOptions {
+  //! true (default): first fit the affine map that best matches the constraints (least squares), move
+  //! every control point by it, and solve (9.13) for the least-norm correction of what remains. Affine
+  //! edits (a translated or rotated whole) are then reproduced exactly everywhere, and free regions far
+  //! from any constraint follow the edit's affine trend. false: the seed's (9.13) alone, where control
+  //! points that no constraint sees stay put (not even a translation is reproduced away from the constraints).
+  bool affine_part = true;
+  //! Tikhonov weight of the pseudo-inverse, relative to the mean diagonal of NᵀN (N: the #C×m basis
+  //! matrix of (9.13)): (NᵀN + ε·mean·I)⁻¹Nᵀ. Directions the constraints barely see stay still instead of
+  //! being blown up; 1e-8 is the least-squares, least-norm solution to about 8 digits elsewhere.
+  double regularization = 1e-8;
+};
+
+//! Base of the space methods. Subclasses define the basis functions (fit_basis, basis) and, unless the
+//! least-norm solve of (9.13) is what they want, the constraint solve (prepare_solve, solve).
+//! Frames (deform) are O(#V·#handles), parallel and allocation-free; deform_to() and deform_controls()
+//! evaluate the basis at every point (O(#V·basis size), cached when it fits in `basis_cache_bytes`).
+class SpaceDeformer : public Deformer {
+ public:
+  //! Space domain, linear, per-vertex targets; exact_constraints as the subclass says (exact_constraints()).
+  DeformerTraits traits() const override;
+
+  //! m: the number of basis functions (lattice control points, cage vertices, RBF centres + 4).
+  int num_coefficients() const { return static_cast<int>(coefficients_.rows()); }
+  //! The coefficients δc of the current map (m×3): zero at rest; after an affine frame, deform_to() or
+  //! deform_controls(), the ones that frame used.
+  const Eigen::MatrixX3d& coefficients() const { return coefficients_; }
+
+  //! Whether the coefficients are control-point displacements (lattice, cage: true; RBF weights: false).
+  virtual bool has_control_points() const { return false; }
+  //! Rest positions of the control points (m×3; lattice points or cage vertices, linear precision: a
+  //! point x = Σ_l c_l ψ_l(x)). \throw UsageError before prepare or for a method without control points.
+  virtual Positions control_points() const;
+  //! Control-point editing (seed 9.5): moves control point l by displacements(l) (m×3) and writes the
+  //! deformed prepared points (#V×3) into out. Constraints are not enforced (the frame report's
+  //! constraint_error measures how far the handle vertices are from their rest: −1, not measured).
+  //! \throw UsageError without control points, before prepare or for a wrong shape; InvalidInput for a
+  //! non-finite displacement.
+  void deform_controls(const Eigen::MatrixX3d& displacements, Positions& out);
+
+  //! The memory allowed for caching the basis of the prepared points (deform_to, deform_controls); above
+  //! it those frames re-evaluate the basis. Default 256 MB.
+  void set_basis_cache_bytes(size_t bytes) { basis_cache_bytes_ = bytes; }
+
+ protected:
+  //! Sets up the basis for points P (#V×3) and the region: the lattice box, the cage's coordinates, the
+  //! RBF centres. The arrays and region are already checked. \throw InvalidInput / SolverError.
+  virtual void fit_basis(const Positions& P, const Region& region) = 0;
+  //! m, once fit_basis() ran.
+  virtual int basis_size() const = 0;
+  //! ψ_l(x) into row (cleared first). Thread-safe: called from parallel loops with one row per thread.
+  virtual void basis(const Vec3& x, BasisRow& row) const = 0;
+  //! Whether every frame meets the constraints exactly (to round-off).
+  virtual bool exact_constraints() const { return false; }
+  //! Factors the map from constraint values to coefficients, for the constrained vertices `constrained`
+  //! of P. Default: the least-norm solve of (9.13) with the options of least_norm_options().
+  virtual void prepare_solve(const Positions& P, const std::vector<int>& constrained);
+  //! Applies that map: values #C×k (one row per constrained vertex, in Region::constrained_vertices()
+  //! order) to coefficients m×k. Linear in values.
+  virtual void solve(const Eigen::MatrixXd& values, Eigen::MatrixXd& coefficients) const;
+  //! Options of the default least-norm solve.
+  virtual LeastNormOptions least_norm_options() const { return {}; }
+
+  void do_prepare(const Positions& P, const Faces& F, const Region& region) final;
+  void do_deform(const std::vector<Mat4>& transforms, Positions& out) final;
+  void do_deform_to(const Positions& targets, Positions& out) final;
+  void do_reset() final;
+  void do_evaluate(const Positions& points, Positions& out) const final;
+
+ private:
+  // out = rest + Σ_l coefficients_(l) ψ_l(rest) at the prepared points (cached basis when present).
+  void apply_coefficients(Positions& out) const;
+  void measure_constraints(const Positions& out, const Positions* targets, const std::vector<Mat4>* transforms);
+
+  Positions rest_;
+  std::vector<int> constrained_, handle_of_;
+  int num_handles_ = 0;
+  //! G (m × 4K): coefficients of handle k's affine basis: columns 4k..4k+3 are the solve of the data
+  //! (x, y, z, 1) on handle k's vertices, 0 elsewhere.
+  Eigen::MatrixXd handle_coefficients_;
+  //! b (#V × 4K, row-major): the affine basis functions at the prepared points, b = Ψ(P) G.
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> point_basis_;
+  Eigen::MatrixX3d coefficients_;
+  std::vector<double> frame_matrices_;  // K × 12: (T_k − I) rows, per frame
+  // Least-norm solve: N (#C×m, row-major sparse) and the Cholesky factor of NᵀN + εI; affine fit.
+  struct LeastNorm;
+  std::shared_ptr<LeastNorm> least_norm_;
+  // Cached basis of the prepared points (CSR), when it fits.
+  std::vector<int> cache_offsets_, cache_index_;
+  std::vector<double> cache_value_;
+  size_t basis_cache_bytes_ = size_t(256) << 20;
+};
+
+}  // namespace msd

@@ -121,8 +121,9 @@ class SpaceDeformer : public Deformer {
   // Least-norm solve: N (#C×m, row-major sparse) and the Cholesky factor of NᵀN + εI; affine fit.
   struct LeastNorm;
   std::shared_ptr<LeastNorm> least_norm_;
-  // Cached basis of the prepared points (CSR), when it fits.
-  std::vector<int> cache_offsets_, cache_index_;
+  // Cached basis of the prepared points (cache_width_ values per point; 0: not cached).
+  size_t cache_width_ = 0;
+  std::vector<int> cache_index_;
   std::vector<double> cache_value_;
   size_t basis_cache_bytes_ = size_t(256) << 20;
 };

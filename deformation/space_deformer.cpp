@@ -4,15 +4,19 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 
 #include "core/checks.h"
 #include "core/errors.h"
+#include "core/mesh.h"
 #include "core/parallel.h"
 #include "core/solver.h"
 
 namespace msd {
 namespace {
 constexpr int kDenseLimit = 4000;
+// A frame warns when some point moves this many times farther than the farthest-moving constraint target.
+constexpr double kOvershoot = 2.0;
 }  // namespace
 
 // The least-norm solve of (9.13): N (#C×m) and the factor of NᵀN + εI; the affine fit's
@@ -121,6 +125,7 @@ void SpaceDeformer::solve(const Eigen::MatrixXd& values, Eigen::MatrixXd& coeffi
 
 void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& region) {
   rest_ = P;
+  rest_diagonal_ = bounding_box_diagonal(P);
   constrained_ = region.constrained_vertices();
   handle_of_.clear();
   for (int v : constrained_) handle_of_.push_back(region.handle_of(v));
@@ -183,7 +188,9 @@ void SpaceDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
   const long n = rest_.rows();
   const double* b = point_basis_.data();
   const long stride = point_basis_.cols();
+  std::atomic<double> largest{0.0};  // largest squared displacement of any point
   parallel_for_chunks(n, [&](long i0, long i1) {
+    double local = 0;
     for (long i = i0; i < i1; ++i) {
       double d[3] = {0, 0, 0};
       const double* bi = b + i * stride;
@@ -195,6 +202,9 @@ void SpaceDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
       out(i, 0) = rest_(i, 0) + d[0];
       out(i, 1) = rest_(i, 1) + d[1];
       out(i, 2) = rest_(i, 2) + d[2];
+      local = std::max(local, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    }
+    for (double seen = largest.load(); local > seen && !largest.compare_exchange_weak(seen, local);) {
     }
   }, 16384);
   // The map's coefficients: δc = Σ_k G_k (T_k − I)ᵀ (for evaluate()).
@@ -206,6 +216,7 @@ void SpaceDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
       coefficients_(l, r) = s;
     }
   measure_constraints(out, nullptr, &transforms);
+  check_overshoot(std::sqrt(largest.load()));
 }
 
 void SpaceDeformer::do_deform_to(const Positions& targets, Positions& out) {
@@ -217,6 +228,7 @@ void SpaceDeformer::do_deform_to(const Positions& targets, Positions& out) {
   coefficients_ = coefficients;
   apply_coefficients(out);
   measure_constraints(out, &targets, nullptr);
+  check_overshoot((out - rest_).rowwise().norm().maxCoeff());
 }
 
 void SpaceDeformer::deform_controls(const Eigen::MatrixX3d& displacements, Positions& out) {
@@ -263,15 +275,30 @@ void SpaceDeformer::do_evaluate(const Positions& points, Positions& out) const {
   }, 1024);
 }
 
+void SpaceDeformer::check_overshoot(double largest_move) {
+  if (!(largest_move > kOvershoot * largest_target_move_) || !(largest_move > 1e-12 * rest_diagonal_)) return;
+  char figures[160];
+  std::snprintf(figures, sizeof(figures), "%.3g times farther than any constrained vertex's target (%.3g vs %.3g of the "
+                "bounding-box diagonal)", largest_move / largest_target_move_, largest_move / rest_diagonal_,
+                largest_target_move_ / rest_diagonal_);
+  frame_report_.warnings.push_back(name() + ": points move up to " + figures + "; " + overshoot_advice());
+}
+
+std::string SpaceDeformer::overshoot_advice() const {
+  return "constraints close together with different motions are amplified; move them apart or use another method";
+}
+
 void SpaceDeformer::measure_constraints(const Positions& out, const Positions* targets,
                                         const std::vector<Mat4>* transforms) {
-  double error = 0;
+  double error = 0, move = 0;
   for (size_t c = 0; c < constrained_.size(); ++c) {
     const Vec3 p = rest_.row(constrained_[c]);
     const Vec3 target = targets ? Vec3(targets->row(c)) : handle_of_[c] < 0 ? p : transform_point((*transforms)[handle_of_[c]], p);
     error = std::max(error, (Vec3(out.row(constrained_[c])) - target).norm());
+    move = std::max(move, (target - p).norm());
   }
   frame_report_.constraint_error = error;
+  largest_target_move_ = move;
 }
 
 }  // namespace msd

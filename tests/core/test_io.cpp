@@ -3,6 +3,7 @@
 #include <fstream>
 #include <random>
 
+#include "core/edit_case.h"
 #include "core/errors.h"
 #include "core/mesh_info.h"
 #include "core/mesh_io.h"
@@ -258,6 +259,28 @@ TEST_CASE("every mesh in shared/data loads with the file's vertex count", "[core
     CHECK(positions(m) == soup.P);
     CHECK(faces(m) == soup.F);
   }
+}
+
+TEST_CASE("an edit case keeps any input and says why a surface method cannot take it", "[core][io]") {
+  test::TempDir tmp;
+  std::ofstream(tmp.file("cloud.off")) << "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n";
+  std::ofstream(tmp.file("cloud.sel")) << "0\n1\n2\n";
+  const EditCase cloud = load_edit_case(tmp.file("cloud.off"), tmp.file("cloud.sel"));
+  CHECK(cloud.P.rows() == 3);
+  CHECK(cloud.F.rows() == 0);
+  CHECK(cloud.region.num_handles() == 1);
+  CHECK(cloud.surface_problem == "no faces (a point cloud)");
+  CHECK_THROWS_AS(require_surface(cloud, "shell"), InvalidInput);
+  CHECK_THROWS_WITH(require_surface(cloud, "shell"),
+                    Contains("shell is a surface method") && Contains("cloud.off") &&
+                        Contains("point cloud") &&
+                        Contains("--method lattice, cage-mvc, cage-harmonic or rbf"));
+  std::ofstream(tmp.file("miswound.off")) << "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 3 2\n";
+  const EditCase repaired = load_edit_case(tmp.file("miswound.off"));
+  CHECK(repaired.surface_problem.empty());
+  CHECK(repaired.F.row(1) == Eigen::RowVector3i(0, 2, 3));
+  CHECK_NOTHROW(require_surface(repaired, "shell"));
+  CHECK_NOTHROW(require_surface(scene_case("lift", 300), "shell"));
 }
 
 TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[core][io][bad-input]") {

@@ -70,6 +70,8 @@ class SpaceDeformer : public Deformer {
   //! Rest positions of the control points (m×3; lattice points or cage vertices, linear precision: a
   //! point x = Σ_l c_l ψ_l(x)). \throw UsageError before prepare or for a method without control points.
   virtual Positions control_points() const;
+  //! Triangles over the control points for pictures and files (a cage's faces); none for a lattice (#F×3).
+  virtual Faces control_faces() const { return Faces(0, 3); }
   //! Control-point editing (seed 9.5): moves control point l by displacements(l) (m×3) and writes the
   //! deformed prepared points (#V×3) into out. Constraints are not enforced (the frame report's
   //! constraint_error measures how far the handle vertices are from their rest: −1, not measured).

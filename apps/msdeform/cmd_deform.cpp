@@ -8,6 +8,7 @@
 #include "core/errors.h"
 #include "analysis/metrics.h"
 #include "core/mesh_io.h"
+#include "deformation/space_deformer.h"
 #include "reconstruction/multiscale.h"
 
 namespace msd::cli {
@@ -40,6 +41,10 @@ void add_deform_command(CLI::App& app) {
   edit->add_to(*cmd);
   method->add_to(*cmd);
   cmd->add_option("-o,--output", *output, "Deformed mesh to write (.off .obj .ply .stl); written atomically")->required();
+  auto controls_output = std::make_shared<std::string>();
+  cmd->add_option("--controls-output", *controls_output,
+                  "lattice, cage-mvc, cage-harmonic: also write the deformed control points (the lattice's as a point "
+                  "cloud, the cage with its faces; .off .obj .ply)");
   cmd->callback([=] {
     const EditCase c = edit->load();
     std::unique_ptr<Deformer> deformer = method->make(c);
@@ -54,7 +59,15 @@ void add_deform_command(CLI::App& app) {
     t0 = Clock::now();
     deformer->deform(c.transforms, out);
     const double frame_ms = ms_since(t0);
+    const auto* space = dynamic_cast<const SpaceDeformer*>(deformer.get());
+    if (!controls_output->empty() && !(space && space->has_control_points()))
+      throw InvalidInput("--controls-output applies to methods with control points (lattice, cage-mvc, cage-harmonic), "
+                         "not " + deformer->name());
     save_mesh(out, c.F, *output);
+    if (!controls_output->empty()) {
+      save_mesh(space->control_points() + space->coefficients(), space->control_faces(), *controls_output);
+      std::printf("  wrote the deformed control points (%d) to %s\n", space->num_coefficients(), controls_output->c_str());
+    }
     std::printf("%s on %s: %ld vertices (%zu free, %d handle(s))\n", deformer->name().c_str(), c.name.c_str(),
                 long(rest.rows()), c.region.free_vertices().size(), c.region.num_handles());
     std::printf("  prepare %.1f ms, frame %.2f ms, handle error %.3g\n", prepare_ms, frame_ms, handle_error(rest, out, c.region, c.transforms));
@@ -81,7 +94,8 @@ void add_deform_command(CLI::App& app) {
       std::printf("  frame: %d iterations, relative residual %.3g%s\n", report.iterations, report.residual,
                   report.converged ? "" : " (not converged)");
     if (report.constraint_error >= 0)
-      std::printf("  constraints met in the least-squares sense: largest distance %.3g\n", report.constraint_error);
+      std::printf("  constraints: largest distance of a constrained vertex from its target %.3g (%.3g of the "
+                  "bounding-box diagonal)\n", report.constraint_error, report.constraint_error / bounding_box_diagonal(rest));
     if (report.folded_faces >= 0)
       std::printf("  folded triangles (normal turned against the deformed base's): %d\n", report.folded_faces);
     for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})

@@ -48,6 +48,10 @@ Catalogue make_builtin() {
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<ArapDeformer>(s.arap); }});
   c.add({"primo", "9.8", "PriMo (Botsch et al. 2006): a rigid prism per face, coupled across shared edges; Levenberg-Marquardt on the prisms' motions",
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<PrimoDeformer>(s.primo); }});
+  c.add({"lattice", "9.5.1", "lattice free-form deformation: cubic B-spline lattice, handles by the least-norm solve (9.13)",
+         [](const MethodSettings& s, const Catalogue&) { return std::make_unique<LatticeDeformer>(s.lattice); }});
+  c.add({"rbf", "9.6", "triharmonic radial basis functions r³ with a linear polynomial, precomputed affine basis per handle",
+         [](const MethodSettings& s, const Catalogue&) { return std::make_unique<RbfDeformer>(s.rbf); }});
   for (const std::string& encoding : encoding_names())
     c.add({"multiscale-" + encoding, "9.3",
            "multi-scale: decompose S = B ⊕ D, deform B with the base method, add the " + encoding + " details back",

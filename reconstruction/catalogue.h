@@ -13,8 +13,10 @@
 #include "deformation/deformer.h"
 #include "deformation/gradient_editing.h"
 #include "deformation/laplacian_editing.h"
+#include "deformation/lattice.h"
 #include "deformation/primo.h"
 #include "deformation/propagation.h"
+#include "deformation/rbf.h"
 #include "deformation/shell.h"
 #include "reconstruction/multiscale.h"
 
@@ -27,6 +29,8 @@ struct MethodSettings {
   LaplacianEditingOptions laplacian;   //!< laplacian
   ArapOptions arap;                    //!< arap
   PrimoOptions primo;                  //!< primo
+  LatticeOptions lattice;              //!< lattice
+  RbfOptions rbf;                      //!< rbf
   DecompositionOptions decomposition;  //!< multiscale-*: how S is split into B and details
   EncodingOptions encoding;            //!< multiscale-*: the encodings' options (the kind comes from the name)
   //! multiscale-*: the catalogue method that deforms the base (any single-scale row).

@@ -1,0 +1,263 @@
+#include "deformation/space_deformer.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/checks.h"
+#include "core/errors.h"
+#include "core/parallel.h"
+#include "core/solver.h"
+
+namespace msd {
+
+// The least-norm solve of (9.13): N (#C×m) and the factor of NᵀN + εI; the affine fit's
+// E = (XᵀX + Λ)⁻¹Xᵀ (4×#C) on centred, scaled coordinates X = [(p − centre)/scale, 1].
+struct SpaceDeformer::LeastNorm {
+  Eigen::SparseMatrix<double, Eigen::RowMajor> N;
+  SparseSPDSolver normal;
+  bool affine_part = true;
+  Eigen::MatrixXd E;
+  Vec3 centre = Vec3::Zero();
+  double scale = 1;
+  Positions controls;  // rest positions of the control points (for the affine part)
+};
+
+DeformerTraits SpaceDeformer::traits() const {
+  DeformerTraits t;
+  t.domain = DeformerDomain::Space;
+  t.solve = DeformerSolve::Linear;
+  t.vertex_targets = true;
+  t.exact_constraints = exact_constraints();
+  return t;
+}
+
+Positions SpaceDeformer::control_points() const {
+  throw UsageError(name() + " has no control points: its coefficients are not displacements of points");
+}
+
+void SpaceDeformer::prepare_solve(const Positions& P, const std::vector<int>& constrained) {
+  const LeastNormOptions options = least_norm_options();
+  if (!(options.regularization > 0) || !std::isfinite(options.regularization))
+    throw InvalidInput(name() + ": the least-norm regularisation must be positive and finite (got " +
+                       std::to_string(options.regularization) + ")");
+  auto ln = std::make_shared<LeastNorm>();
+  const int m = basis_size();
+  const int nc = static_cast<int>(constrained.size());
+  // N: the basis at the constrained vertices.
+  std::vector<Eigen::Triplet<double>> entries;
+  BasisRow row;
+  for (int c = 0; c < nc; ++c) {
+    basis(P.row(constrained[c]).transpose(), row);
+    for (size_t j = 0; j < row.index.size(); ++j) entries.emplace_back(c, row.index[j], row.value[j]);
+  }
+  ln->N.resize(nc, m);
+  ln->N.setFromTriplets(entries.begin(), entries.end());
+  SparseMatrix normal = SparseMatrix(ln->N.transpose()) * ln->N;
+  double mean = normal.diagonal().sum() / m;
+  if (!(mean > 0)) mean = 1;
+  SparseMatrix shift(m, m);
+  shift.setIdentity();
+  normal += (options.regularization * mean) * shift;
+  ln->normal.factor(normal);
+  // The affine fit, on coordinates centred at the constraints' mean and scaled by their RMS radius.
+  ln->affine_part = options.affine_part;
+  if (ln->affine_part) {
+    for (int c = 0; c < nc; ++c) ln->centre += P.row(constrained[c]).transpose();
+    ln->centre /= nc;
+    double rms = 0;
+    for (int c = 0; c < nc; ++c) rms += (P.row(constrained[c]).transpose() - ln->centre).squaredNorm();
+    ln->scale = std::sqrt(rms / nc);
+    if (!(ln->scale > 0)) ln->scale = 1;
+    Eigen::MatrixXd X(nc, 4);
+    for (int c = 0; c < nc; ++c) X.row(c) << (P.row(constrained[c]) - ln->centre.transpose()) / ln->scale, 1.0;
+    Eigen::Matrix4d XtX = X.transpose() * X;
+    // Λ: directions of the linear part the constraints do not span (coplanar or collinear constraints)
+    // keep a zero gradient instead of an arbitrary one.
+    XtX.diagonal().head<3>().array() += 1e-10 * nc;
+    ln->E = XtX.ldlt().solve(X.transpose());
+    ln->controls = control_points();
+  }
+  least_norm_ = std::move(ln);
+}
+
+void SpaceDeformer::solve(const Eigen::MatrixXd& values, Eigen::MatrixXd& coefficients) const {
+  const LeastNorm& ln = *least_norm_;
+  Eigen::MatrixXd residual = values;
+  coefficients.setZero(ln.N.cols(), values.cols());
+  if (ln.affine_part) {
+    const Eigen::MatrixXd theta = ln.E * values;  // 4 × k: [x̃ 1] θ is the best affine fit
+    Eigen::MatrixXd Xc(ln.controls.rows(), 4);
+    Xc.leftCols<3>() = (ln.controls.rowwise() - ln.centre.transpose()) / ln.scale;
+    Xc.col(3).setOnes();
+    coefficients = Xc * theta;
+    residual -= ln.N * coefficients;
+  }
+  const Eigen::MatrixXd rhs = ln.N.transpose() * residual;
+  coefficients += ln.normal.solve(rhs);
+}
+
+void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& region) {
+  rest_ = P;
+  constrained_ = region.constrained_vertices();
+  handle_of_.clear();
+  for (int v : constrained_) handle_of_.push_back(region.handle_of(v));
+  num_handles_ = region.num_handles();
+  least_norm_.reset();
+  fit_basis(P, region);
+  const int m = basis_size();
+  prepare_solve(P, constrained_);
+
+  // Handle k's affine basis: the solve of the data (x, y, z, 1) on its vertices, zero elsewhere.
+  const int nc = static_cast<int>(constrained_.size());
+  const int cols = 4 * num_handles_;
+  Eigen::MatrixXd data = Eigen::MatrixXd::Zero(nc, cols);
+  for (int c = 0; c < nc; ++c)
+    if (handle_of_[c] >= 0) data.row(c).segment<4>(4 * handle_of_[c]) << P.row(constrained_[c]), 1.0;
+  Eigen::MatrixXd G;
+  solve(data, G);
+  handle_coefficients_ = G;
+
+  // b = Ψ(P) G at every point, and the basis itself cached when it fits.
+  const long n = P.rows();
+  BasisRow probe;
+  basis(P.row(0).transpose(), probe);
+  const size_t estimate = static_cast<size_t>(n) * probe.index.size() * (sizeof(int) + sizeof(double));
+  const bool cache = estimate <= basis_cache_bytes_;
+  point_basis_.setZero(n, cols);
+  const long blocks = std::min<long>(n, 256);
+  std::vector<std::vector<int>> block_index(cache ? blocks : 0), block_count(cache ? blocks : 0);
+  std::vector<std::vector<double>> block_value(cache ? blocks : 0);
+  parallel_for_chunks(
+      blocks,
+      [&](long b0, long b1) {
+        BasisRow row;
+        for (long b = b0; b < b1; ++b)
+          for (long i = n * b / blocks; i < n * (b + 1) / blocks; ++i) {
+            basis(P.row(i).transpose(), row);
+            for (size_t j = 0; j < row.index.size(); ++j) point_basis_.row(i) += row.value[j] * G.row(row.index[j]);
+            if (cache) {
+              block_index[b].insert(block_index[b].end(), row.index.begin(), row.index.end());
+              block_value[b].insert(block_value[b].end(), row.value.begin(), row.value.end());
+              block_count[b].push_back(static_cast<int>(row.index.size()));
+            }
+          }
+      },
+      1);
+  cache_offsets_.clear();
+  cache_index_.clear();
+  cache_value_.clear();
+  if (cache) {
+    cache_offsets_.reserve(n + 1);
+    cache_offsets_.push_back(0);
+    for (long b = 0; b < blocks; ++b) {
+      for (int count : block_count[b]) cache_offsets_.push_back(cache_offsets_.back() + count);
+      cache_index_.insert(cache_index_.end(), block_index[b].begin(), block_index[b].end());
+      cache_value_.insert(cache_value_.end(), block_value[b].begin(), block_value[b].end());
+      std::vector<int>().swap(block_index[b]);
+      std::vector<double>().swap(block_value[b]);
+    }
+  }
+  coefficients_.setZero(m, 3);
+  frame_matrices_.assign(static_cast<size_t>(12) * num_handles_, 0.0);
+}
+
+void SpaceDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
+  const int K = num_handles_;
+  double* M = frame_matrices_.data();  // handle k: (T_k − I) top three rows, row-major 3×4
+  for (int k = 0; k < K; ++k)
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) M[12 * k + 4 * r + c] = transforms[k](r, c) - (r == c ? 1.0 : 0.0);
+  const long n = rest_.rows();
+  const double* b = point_basis_.data();
+  const long stride = point_basis_.cols();
+  parallel_for_chunks(n, [&](long i0, long i1) {
+    for (long i = i0; i < i1; ++i) {
+      double d[3] = {0, 0, 0};
+      const double* bi = b + i * stride;
+      for (int k = 0; k < K; ++k) {
+        const double* Mk = M + 12 * k;
+        const double* bk = bi + 4 * k;
+        for (int r = 0; r < 3; ++r) d[r] += Mk[4 * r] * bk[0] + Mk[4 * r + 1] * bk[1] + Mk[4 * r + 2] * bk[2] + Mk[4 * r + 3] * bk[3];
+      }
+      out(i, 0) = rest_(i, 0) + d[0];
+      out(i, 1) = rest_(i, 1) + d[1];
+      out(i, 2) = rest_(i, 2) + d[2];
+    }
+  }, 16384);
+  // The map's coefficients: δc = Σ_k G_k (T_k − I)ᵀ (for evaluate()).
+  for (Eigen::Index l = 0; l < coefficients_.rows(); ++l)
+    for (int r = 0; r < 3; ++r) {
+      double s = 0;
+      for (int k = 0; k < K; ++k)
+        for (int c = 0; c < 4; ++c) s += handle_coefficients_(l, 4 * k + c) * M[12 * k + 4 * r + c];
+      coefficients_(l, r) = s;
+    }
+  measure_constraints(out, nullptr, &transforms);
+}
+
+void SpaceDeformer::do_deform_to(const Positions& targets, Positions& out) {
+  Eigen::MatrixXd displacements(targets.rows(), 3);
+  for (size_t c = 0; c < constrained_.size(); ++c)
+    displacements.row(c) = targets.row(c) - rest_.row(constrained_[c]);
+  Eigen::MatrixXd coefficients;
+  solve(displacements, coefficients);
+  coefficients_ = coefficients;
+  apply_coefficients(out);
+  measure_constraints(out, &targets, nullptr);
+}
+
+void SpaceDeformer::deform_controls(const Eigen::MatrixX3d& displacements, Positions& out) {
+  if (!has_control_points())
+    throw UsageError(name() + " has no control points to edit; use deform() or deform_to()");
+  if (!prepared()) throw UsageError(name() + ": deform_controls() called before prepare()");
+  if (displacements.rows() != coefficients_.rows())
+    throw UsageError(name() + ": " + std::to_string(displacements.rows()) + " control displacements given for " +
+                     std::to_string(coefficients_.rows()) + " control points");
+  check_finite(displacements, name().c_str(), "the control displacements");
+  begin_frame(out);
+  coefficients_ = displacements;
+  apply_coefficients(out);
+  end_frame(out);
+}
+
+void SpaceDeformer::do_reset() { coefficients_.setZero(); }
+
+void SpaceDeformer::apply_coefficients(Positions& out) const {
+  const long n = rest_.rows();
+  if (!cache_offsets_.empty()) {
+    parallel_for_chunks(n, [&](long i0, long i1) {
+      for (long i = i0; i < i1; ++i) {
+        Eigen::RowVector3d d = Eigen::RowVector3d::Zero();
+        for (int j = cache_offsets_[i]; j < cache_offsets_[i + 1]; ++j) d += cache_value_[j] * coefficients_.row(cache_index_[j]);
+        out.row(i) = rest_.row(i) + d;
+      }
+    });
+    return;
+  }
+  do_evaluate(rest_, out);
+}
+
+void SpaceDeformer::do_evaluate(const Positions& points, Positions& out) const {
+  parallel_for_chunks(points.rows(), [&](long i0, long i1) {
+    BasisRow row;
+    for (long i = i0; i < i1; ++i) {
+      basis(points.row(i).transpose(), row);
+      Eigen::RowVector3d d = Eigen::RowVector3d::Zero();
+      for (size_t j = 0; j < row.index.size(); ++j) d += row.value[j] * coefficients_.row(row.index[j]);
+      out.row(i) = points.row(i) + d;
+    }
+  }, 1024);
+}
+
+void SpaceDeformer::measure_constraints(const Positions& out, const Positions* targets,
+                                        const std::vector<Mat4>* transforms) {
+  double error = 0;
+  for (size_t c = 0; c < constrained_.size(); ++c) {
+    const Vec3 p = rest_.row(constrained_[c]);
+    const Vec3 target = targets ? Vec3(targets->row(c)) : handle_of_[c] < 0 ? p : transform_point((*transforms)[handle_of_[c]], p);
+    error = std::max(error, (Vec3(out.row(constrained_[c])) - target).norm());
+  }
+  frame_report_.constraint_error = error;
+}
+
+}  // namespace msd

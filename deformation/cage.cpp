@@ -77,6 +77,17 @@ MeanValueCage::MeanValueCage(const Positions& cage_P, const Faces& cage_F) : P_(
   if (cage_P.rows() == 0 || cage_F.rows() == 0) throw InvalidInput("mean value coordinates: the cage is empty");
   const double diag = bbox_diagonal(cage_P);
   tol_ = 1e-13 * diag;
+  centre_ = cage_P.colwise().mean().transpose();
+  scale_ = diag > 0 ? diag : 1.0;
+  unit_ = (cage_P.rowwise() - centre_.transpose()) / scale_;
+  Eigen::Matrix4d gram = Eigen::Matrix4d::Zero();
+  for (Eigen::Index l = 0; l < cage_P.rows(); ++l) {
+    Eigen::Vector4d a(1, unit_(l, 0), unit_(l, 1), unit_(l, 2));
+    gram += a * a.transpose();
+  }
+  gram_inv_ = gram.inverse();
+  if (!gram_inv_.allFinite() || !(std::abs(gram.determinant()) > 1e-14 * std::pow(static_cast<double>(cage_P.rows()), 4)))
+    throw InvalidInput("mean value coordinates: the cage vertices are coplanar");
   std::map<std::pair<int, int>, int> edge_id;
   faces_.resize(cage_F.rows());
   for (Eigen::Index f = 0; f < cage_F.rows(); ++f) {
@@ -172,7 +183,11 @@ void MeanValueCage::coordinates(const Vec3& x, MeanValueWorkspace& ws, double* w
     // 2 m⊥ = Σ θ_k a_k / L_k, L_k = |r_{k+1} × r_{k+2}| = sqrt(a_k² + η² |E_k|²).
     double mperp2 = g[0] * a[0] + g[1] * a[1] + g[2] * a[2];
     const bool outside = !(a[0] > 0 && a[1] > 0 && a[2] > 0);
-    if (outside && a[0] != 0 && a[1] != 0 && a[2] != 0 &&
+    // Thin: x is close to the plane compared with its in-plane distance to every edge line (L_k ≈ |a_k|).
+    const bool thin = std::abs(eta) * t.edge_len[0] < 0.25 * std::abs(a[0]) &&
+                      std::abs(eta) * t.edge_len[1] < 0.25 * std::abs(a[1]) &&
+                      std::abs(eta) * t.edge_len[2] < 0.25 * std::abs(a[2]);
+    if (outside && thin &&
         std::abs(mperp2) < 0.125 * (std::abs(g[0] * a[0]) + std::abs(g[1] * a[1]) + std::abs(g[2] * a[2]))) {
       // A thin spherical triangle (x near the face's plane, outside the face): the sum cancels. With s_k the
       // sign of a_k, φ_k the angle edge k subtends at the projection (Σ s_k φ_k = 0 outside the face) and
@@ -207,6 +222,18 @@ void MeanValueCage::coordinates(const Vec3& x, MeanValueWorkspace& ws, double* w
                       ", " + std::to_string(x[2]) + ") do not normalise (a bug)");
   const double inv_total = 1.0 / total;
   for (int l = 0; l < m; ++l) w[l] *= inv_total;
+  // Far from the cage the weights of front and back faces cancel in Σ w (it falls like 1/D⁴, each weight
+  // like 1/D³), and the per-face round-off (relative ε·D/edge) is amplified by that. The least-norm
+  // correction onto Σ w = 1, Σ w c = x removes what is left of it (O(|residual|), ≤ 1e-12 of the diagonal
+  // within a diagonal of the cage) so partition of unity and linear precision hold to round-off everywhere.
+  double rho[4] = {1, (x[0] - centre_[0]) / scale_, (x[1] - centre_[1]) / scale_, (x[2] - centre_[2]) / scale_};
+  for (int l = 0; l < m; ++l) {
+    rho[0] -= w[l];
+    for (int c = 0; c < 3; ++c) rho[c + 1] -= w[l] * unit_(l, c);
+  }
+  double delta[4];
+  for (int i = 0; i < 4; ++i) delta[i] = gram_inv_(i, 0) * rho[0] + gram_inv_(i, 1) * rho[1] + gram_inv_(i, 2) * rho[2] + gram_inv_(i, 3) * rho[3];
+  for (int l = 0; l < m; ++l) w[l] += delta[0] + delta[1] * unit_(l, 0) + delta[2] * unit_(l, 1) + delta[3] * unit_(l, 2);
 }
 
 double MeanValueCage::winding_number(const Vec3& x) const {

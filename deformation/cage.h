@@ -66,6 +66,10 @@ struct MeanValueWorkspace {
 //! (a thin spherical triangle, the paper's "ignore t" case) m⊥ = O(η²) is computed from angle differences
 //! that do not cancel. On a vertex, edge or face (within 1e-13 of the cage diagonal) the coordinates are
 //! the vertex, the linear interpolation on the edge, or the barycentric coordinates on the face.
+//! Far outside (distance D) the coordinates are ill-conditioned: Σ_l w_l falls like D⁻⁴ while each weight
+//! falls like D⁻³, so the per-face round-off grows about like (D/diag)⁴·1e-13 in linear precision (Ju et
+//! al.'s formula in double: 100 times that). A least-norm correction onto Σ w = 1, Σ w c = x (its size is
+//! that residual: ≤ 1e-12 within a diagonal of the cage) keeps both properties at round-off everywhere.
 class MeanValueCage {
  public:
   MeanValueCage() = default;
@@ -100,6 +104,11 @@ class MeanValueCage {
   std::vector<std::pair<int, int>> edges_;  // undirected, a < b
   std::vector<double> edge_len_;
   double tol_ = 0;  // snapping distance: 1e-13 × the cage's bounding-box diagonal
+  // The linear-precision correction: vertices centred and scaled, (Σ_l [1 ĉ_l][1 ĉ_l]ᵀ)⁻¹.
+  Vec3 centre_ = Vec3::Zero();
+  double scale_ = 1;
+  Positions unit_;
+  Eigen::Matrix4d gram_inv_ = Eigen::Matrix4d::Zero();
 };
 
 //! One-off mean value coordinates of x with respect to the closed cage (cage_P #C×3, cage_F #T×3) into w

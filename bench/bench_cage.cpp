@@ -33,8 +33,9 @@ int main(int argc, char** argv) {
     const msd::MeanValueCage cage(C, F);
     const long n = scene.P.rows();
     const int m = cage.num_vertices();
-    std::printf("26-DOP cage (1 subdivision) around %ld points: %d vertices, %d faces, %d edges, built in %.2f ms\n", n, m,
-                cage.num_faces(), cage.num_edges(), cage_ms);
+    std::printf(
+        "26-DOP cage (1 subdivision) around %ld points: %d vertices, %d faces, %d edges, built in %.2f ms\n",
+        n, m, cage.num_faces(), cage.num_edges(), cage_ms);
     std::vector<double> sink(2, 0.0);
     const auto serial = time_frames(3, [&](int) {
       msd::MeanValueWorkspace ws;
@@ -56,7 +57,8 @@ int main(int argc, char** argv) {
           },
           256);
     });
-    std::printf("%-34s %12s %14s %16s\n", "mean value coordinates", "us/point", "ns/(pt*vertex)", "points/s (all)");
+    std::printf("%-34s %12s %14s %16s\n", "mean value coordinates", "us/point", "ns/(pt*vertex)",
+                "points/s (all)");
     std::printf("%-34s %12.2f %14.1f %16s\n", "  one thread", serial_us, 1e3 * serial_us / m, "");
     std::printf("%-34s %12.2f %14.1f %16.3g\n", "  parallel_for_chunks", 1e3 * parallel.front() / n,
                 1e6 * parallel.front() / (double(n) * m), n / (1e-3 * parallel.front()));
@@ -74,10 +76,12 @@ int main(int argc, char** argv) {
             },
             1024);
       });
-      std::printf("harmonic coordinates, %3d cells: grid %dx%dx%d, %d inside + %d near-boundary nodes, precompute %.2f s, "
-                  "%.2f us/point to interpolate\n",
-                  resolution, g[0], g[1], g[2], hc.num_inside_nodes(), hc.num_boundary_nodes(), build,
-                  1e3 * eval.front() / n);
+      std::printf(
+          "harmonic coordinates, %3d cells: grid %dx%dx%d, %d inside + %d near-boundary nodes, precompute "
+          "%.2f s, "
+          "%.2f us/point to interpolate\n",
+          resolution, g[0], g[1], g[2], hc.num_inside_nodes(), hc.num_boundary_nodes(), build,
+          1e3 * eval.front() / n);
     }
     if (sink[0] == 12345.678) std::printf(" ");
   }
@@ -93,8 +97,9 @@ int main(int argc, char** argv) {
     auto t0 = Clock::now();
     d.prepare(scene.P, scene.F, scene.region);
     const double prepare = seconds_since(t0);
-    std::printf("\ncage-mvc on %ld points, %ld cage vertices: prepare %.2f s (basis at every point, cached)\n", n,
-                long(d.num_coefficients()), prepare);
+    std::printf(
+        "\ncage-mvc on %ld points, %ld cage vertices: prepare %.2f s (basis at every point, cached)\n", n,
+        long(d.num_coefficients()), prepare);
     msd::Positions out(n, 3);
     std::vector<msd::Mat4> T = scene.transforms;
     const msd::Mat4 full = T[0];
@@ -104,22 +109,22 @@ int main(int argc, char** argv) {
       d.deform(T, out);
     });
     std::printf("%-40s %14s %14s %14s\n", "frame", "median[ms]", "min[ms]", "points/s");
-    std::printf("%-40s %14.2f %14.2f %14.3g\n", "affine (one handle)", frames[frames.size() / 2], frames.front(),
-                n / (1e-3 * frames[frames.size() / 2]));
+    std::printf("%-40s %14.2f %14.2f %14.3g\n", "affine (one handle)", frames[frames.size() / 2],
+                frames.front(), n / (1e-3 * frames[frames.size() / 2]));
     Eigen::MatrixX3d moves = Eigen::MatrixX3d::Zero(d.num_coefficients(), 3);
     const auto edits = time_frames(5, [&](int f) {
       moves(f % moves.rows(), 2) += 0.01;
       d.deform_controls(moves, out);
     });
-    std::printf("%-40s %14.2f %14.2f %14.3g\n", "deform_controls (cached basis)", edits[edits.size() / 2], edits.front(),
-                n / (1e-3 * edits[edits.size() / 2]));
+    std::printf("%-40s %14.2f %14.2f %14.3g\n", "deform_controls (cached basis)", edits[edits.size() / 2],
+                edits.front(), n / (1e-3 * edits[edits.size() / 2]));
     // Without the cache (the default 256 MB holds it only below ~100k points here) every edit
     // re-evaluates the coordinates at every point.
     msd::CageDeformer uncached;
     uncached.prepare(scene.P, scene.F, scene.region);
     const auto slow = time_frames(1, [&](int) { uncached.deform_controls(moves, out); });
-    std::printf("%-40s %14.2f %14.2f %14.3g\n", "deform_controls (256 MB: not cached)", slow.front(), slow.front(),
-                n / (1e-3 * slow.front()));
+    std::printf("%-40s %14.2f %14.2f %14.3g\n", "deform_controls (256 MB: not cached)", slow.front(),
+                slow.front(), n / (1e-3 * slow.front()));
   }
   return 0;
 }

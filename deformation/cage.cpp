@@ -43,23 +43,23 @@ std::string cage_problem(const Positions& P, const Faces& F, double* volume) {
     const Vec3 pa = P.row(a), pb = P.row(b), pc = P.row(c);
     const Vec3 n = (pb - pa).cross(pc - pa);
     if (!(n.norm() > 1e-12 * diag * diag))
-      return "face " + std::to_string(f) + " (vertices " + std::to_string(a) + ", " + std::to_string(b) + ", " +
-             std::to_string(c) + ") has zero area";
+      return "face " + std::to_string(f) + " (vertices " + std::to_string(a) + ", " + std::to_string(b) +
+             ", " + std::to_string(c) + ") has zero area";
     vol += pa.dot(pb.cross(pc)) / 6;
     used[a] = used[b] = used[c] = 1;
     for (int k = 0; k < 3; ++k) {
       const int from = F(f, k), to = F(f, (k + 1) % 3);
       auto [it, inserted] = directed.emplace(std::make_pair(from, to), static_cast<int>(f));
       if (!inserted)
-        return "edge (" + std::to_string(from) + ", " + std::to_string(to) + ") is used in the same direction by faces " +
-               std::to_string(it->second) + " and " + std::to_string(f) +
-               ": the cage is non-manifold there or not consistently oriented";
+        return "edge (" + std::to_string(from) + ", " + std::to_string(to) +
+               ") is used in the same direction by faces " + std::to_string(it->second) + " and " +
+               std::to_string(f) + ": the cage is non-manifold there or not consistently oriented";
     }
   }
   for (const auto& [e, f] : directed)
     if (!directed.count({e.second, e.first}))
-      return "edge (" + std::to_string(e.first) + ", " + std::to_string(e.second) + ") of face " + std::to_string(f) +
-             " has no opposite face: the cage is not closed there";
+      return "edge (" + std::to_string(e.first) + ", " + std::to_string(e.second) + ") of face " +
+             std::to_string(f) + " has no opposite face: the cage is not closed there";
   for (long v = 0; v < nv; ++v)
     if (!used[v]) return "vertex " + std::to_string(v) + " is in no face";
   if (!(std::abs(vol) > 1e-12 * diag * diag * diag)) return "the cage encloses no volume";
@@ -74,7 +74,8 @@ std::string cage_problem(const Positions& P, const Faces& F, double* volume) {
 
 MeanValueCage::MeanValueCage(const Positions& cage_P, const Faces& cage_F) : P_(cage_P) {
   check_mesh_arrays(cage_P, cage_F, "mean value coordinates");
-  if (cage_P.rows() == 0 || cage_F.rows() == 0) throw InvalidInput("mean value coordinates: the cage is empty");
+  if (cage_P.rows() == 0 || cage_F.rows() == 0)
+    throw InvalidInput("mean value coordinates: the cage is empty");
   const double diag = bbox_diagonal(cage_P);
   tol_ = 1e-13 * diag;
   centre_ = cage_P.colwise().mean().transpose();
@@ -86,7 +87,8 @@ MeanValueCage::MeanValueCage(const Positions& cage_P, const Faces& cage_F) : P_(
     gram += a * a.transpose();
   }
   gram_inv_ = gram.inverse();
-  if (!gram_inv_.allFinite() || !(std::abs(gram.determinant()) > 1e-14 * std::pow(static_cast<double>(cage_P.rows()), 4)))
+  if (!gram_inv_.allFinite() ||
+      !(std::abs(gram.determinant()) > 1e-14 * std::pow(static_cast<double>(cage_P.rows()), 4)))
     throw InvalidInput("mean value coordinates: the cage vertices are coplanar");
   std::map<std::pair<int, int>, int> edge_id;
   faces_.resize(cage_F.rows());
@@ -94,7 +96,8 @@ MeanValueCage::MeanValueCage(const Positions& cage_P, const Faces& cage_F) : P_(
     Face& t = faces_[f];
     for (int k = 0; k < 3; ++k) t.v[k] = cage_F(f, k);
     for (int k = 0; k < 3; ++k) {
-      const int a = std::min(t.v[(k + 1) % 3], t.v[(k + 2) % 3]), b = std::max(t.v[(k + 1) % 3], t.v[(k + 2) % 3]);
+      const int a = std::min(t.v[(k + 1) % 3], t.v[(k + 2) % 3]),
+                b = std::max(t.v[(k + 1) % 3], t.v[(k + 2) % 3]);
       auto [it, inserted] = edge_id.emplace(std::make_pair(a, b), static_cast<int>(edges_.size()));
       if (inserted) {
         edges_.push_back({a, b});
@@ -152,7 +155,8 @@ void MeanValueCage::coordinates(const Vec3& x, MeanValueWorkspace& ws, double* w
     }
     const double s = std::sqrt(s2), co = std::sqrt(c2);  // 2 sin(θ/2), 2 cos(θ/2)
     const double theta = 2 * std::atan2(s, co), sin_theta = 0.5 * s * co;
-    if (co < s && d[a] * d[b] * sin_theta <= tol_ * edge_len_[e]) {  // on the edge (obtuse angle: between a and b)
+    if (co < s &&
+        d[a] * d[b] * sin_theta <= tol_ * edge_len_[e]) {  // on the edge (obtuse angle: between a and b)
       w[a] = d[b] / (d[a] + d[b]);
       w[b] = d[a] / (d[a] + d[b]);
       return;
@@ -218,22 +222,26 @@ void MeanValueCage::coordinates(const Vec3& x, MeanValueWorkspace& ws, double* w
   for (int l = 0; l < m; ++l) total += w[l];
   // total > 0 inside the cage and < 0 outside (signed 1/distance along every ray); never 0 off the surface.
   if (!(std::abs(total) > 0) || !std::isfinite(total))
-    throw SolverError("mean value coordinates: the weights at (" + std::to_string(x[0]) + ", " + std::to_string(x[1]) +
-                      ", " + std::to_string(x[2]) + ") do not normalise (a bug)");
+    throw SolverError("mean value coordinates: the weights at (" + std::to_string(x[0]) + ", " +
+                      std::to_string(x[1]) + ", " + std::to_string(x[2]) + ") do not normalise (a bug)");
   const double inv_total = 1.0 / total;
   for (int l = 0; l < m; ++l) w[l] *= inv_total;
   // Far from the cage the weights of front and back faces cancel in Σ w (it falls like 1/D⁴, each weight
   // like 1/D³), and the per-face round-off (relative ε·D/edge) is amplified by that. The least-norm
   // correction onto Σ w = 1, Σ w c = x removes what is left of it (O(|residual|), ≤ 1e-12 of the diagonal
   // within a diagonal of the cage) so partition of unity and linear precision hold to round-off everywhere.
-  double rho[4] = {1, (x[0] - centre_[0]) / scale_, (x[1] - centre_[1]) / scale_, (x[2] - centre_[2]) / scale_};
+  double rho[4] = {1, (x[0] - centre_[0]) / scale_, (x[1] - centre_[1]) / scale_,
+                   (x[2] - centre_[2]) / scale_};
   for (int l = 0; l < m; ++l) {
     rho[0] -= w[l];
     for (int c = 0; c < 3; ++c) rho[c + 1] -= w[l] * unit_(l, c);
   }
   double delta[4];
-  for (int i = 0; i < 4; ++i) delta[i] = gram_inv_(i, 0) * rho[0] + gram_inv_(i, 1) * rho[1] + gram_inv_(i, 2) * rho[2] + gram_inv_(i, 3) * rho[3];
-  for (int l = 0; l < m; ++l) w[l] += delta[0] + delta[1] * unit_(l, 0) + delta[2] * unit_(l, 1) + delta[3] * unit_(l, 2);
+  for (int i = 0; i < 4; ++i)
+    delta[i] = gram_inv_(i, 0) * rho[0] + gram_inv_(i, 1) * rho[1] + gram_inv_(i, 2) * rho[2] +
+               gram_inv_(i, 3) * rho[3];
+  for (int l = 0; l < m; ++l)
+    w[l] += delta[0] + delta[1] * unit_(l, 0) + delta[2] * unit_(l, 1) + delta[3] * unit_(l, 2);
 }
 
 double MeanValueCage::winding_number(const Vec3& x) const {
@@ -255,7 +263,6 @@ void mean_value_coordinates(const Positions& cage_P, const Faces& cage_F, const 
   MeanValueWorkspace ws;
   cage.coordinates(x, ws, w);
 }
-
 
 // =====================================================================================================
 // Harmonic coordinates
@@ -290,13 +297,15 @@ struct HarmonicCoordinates::Impl {
   MeanValueCage mvc;
   Vec3 origin;
   double h = 0;
-  Eigen::Vector3i n;            // nodes per axis
-  std::vector<int> row_of;      // per node: its row in `values`, or -1 (far outside: MVC on demand)
+  Eigen::Vector3i n;        // nodes per axis
+  std::vector<int> row_of;  // per node: its row in `values`, or -1 (far outside: MVC on demand)
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> values;  // stored nodes × #C
   int inside = 0, boundary = 0;
   double seconds = 0;
 
-  long node(int i, int j, int k) const { return i + static_cast<long>(n[0]) * (j + static_cast<long>(n[1]) * k); }
+  long node(int i, int j, int k) const {
+    return i + static_cast<long>(n[0]) * (j + static_cast<long>(n[1]) * k);
+  }
   Vec3 position(long id) const {
     const long i = id % n[0], j = (id / n[0]) % n[1], k = id / (static_cast<long>(n[0]) * n[1]);
     return origin + h * Vec3(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k));
@@ -307,8 +316,8 @@ HarmonicCoordinates::HarmonicCoordinates(const Positions& cage_P, const Faces& c
     : impl_(std::make_unique<Impl>()) {
   const char* who = "harmonic coordinates";
   if (resolution < 4 || resolution > 1024)
-    throw InvalidInput(std::string(who) + ": the resolution must be in 4..1024 cells (got " + std::to_string(resolution) +
-                       ")");
+    throw InvalidInput(std::string(who) + ": the resolution must be in 4..1024 cells (got " +
+                       std::to_string(resolution) + ")");
   const auto t0 = std::chrono::steady_clock::now();
   Impl& g = *impl_;
   g.mvc = MeanValueCage(cage_P, cage_F);
@@ -341,13 +350,15 @@ HarmonicCoordinates::HarmonicCoordinates(const Positions& cage_P, const Faces& c
       for (int j = i0[1]; j <= i1[1]; ++j)
         for (int i = i0[0]; i <= i1[0]; ++i) {
           const long id = g.node(i, j, k);
-          if (cls[id] != kNear && point_triangle_distance2(g.position(id), a, b, c) <= radius2) cls[id] = kNear;
+          if (cls[id] != kNear && point_triangle_distance2(g.position(id), a, b, c) <= radius2)
+            cls[id] = kNear;
         }
   }
   // Outside: a 6-connected flood fill from a corner (one cell beyond the cage's box, so never near) through
-  // nodes that are not near-boundary. Two 6-neighbours that are both farther than half a cell from the surface
-  // cannot have it between them, so the fill does not leak inside.
-  const long strides[6] = {1, -1, g.n[0], -g.n[0], static_cast<long>(g.n[0]) * g.n[1], -static_cast<long>(g.n[0]) * g.n[1]};
+  // nodes that are not near-boundary. Two 6-neighbours that are both farther than half a cell from the
+  // surface cannot have it between them, so the fill does not leak inside.
+  const long strides[6] = {
+      1, -1, g.n[0], -g.n[0], static_cast<long>(g.n[0]) * g.n[1], -static_cast<long>(g.n[0]) * g.n[1]};
   auto neighbour = [&](long id, int dir) -> long {
     const long i = id % g.n[0], j = (id / g.n[0]) % g.n[1], k = id / (static_cast<long>(g.n[0]) * g.n[1]);
     const long c[3] = {i, j, k};
@@ -402,8 +413,9 @@ HarmonicCoordinates::HarmonicCoordinates(const Positions& cage_P, const Faces& c
   const double bytes = 8.0 * static_cast<double>(inside_nodes.size() + mvc_nodes.size()) * m;
   if (bytes > 4e9)
     throw InvalidInput(std::string(who) + ": " + std::to_string(static_cast<long>(bytes / 1e6)) +
-                       " MB of node values (" + std::to_string(inside_nodes.size() + mvc_nodes.size()) + " nodes × " +
-                       std::to_string(m) + " cage vertices); lower harmonic_resolution or use fewer cage vertices");
+                       " MB of node values (" + std::to_string(inside_nodes.size() + mvc_nodes.size()) +
+                       " nodes × " + std::to_string(m) +
+                       " cage vertices); lower harmonic_resolution or use fewer cage vertices");
   g.row_of.assign(num_nodes, -1);
   int rows = 0;
   for (long id = 0; id < num_nodes; ++id)
@@ -422,7 +434,8 @@ HarmonicCoordinates::HarmonicCoordinates(const Positions& cage_P, const Faces& c
       },
       64);
 
-  // Inside nodes: the 7-point Laplace equation, Σ_nb (u_nb − u_i) = 0, with the near-boundary neighbours known.
+  // Inside nodes: the 7-point Laplace equation, Σ_nb (u_nb − u_i) = 0, with the near-boundary neighbours
+  // known.
   if (!inside_nodes.empty()) {
     std::vector<int> var_of(num_nodes, -1);
     std::vector<long> var_node;
@@ -436,7 +449,8 @@ HarmonicCoordinates::HarmonicCoordinates(const Positions& cage_P, const Faces& c
       for (int dir = 0; dir < 6; ++dir) {
         const long nb = neighbour(id, dir);
         if (nb < 0 || cls[nb] == kOutside)
-          throw SolverError(std::string(who) + ": inside node " + std::to_string(id) + " touches the outside (a bug)");
+          throw SolverError(std::string(who) + ": inside node " + std::to_string(id) +
+                            " touches the outside (a bug)");
         if (cls[nb] == kInside && nb < id) continue;  // each inside pair once
         if (var_of[nb] < 0) {
           var_of[nb] = static_cast<int>(var_node.size());
@@ -456,10 +470,12 @@ HarmonicCoordinates::HarmonicCoordinates(const Positions& cage_P, const Faces& c
     ConstrainedQuadratic system;
     system.prepare(Q, known);
     Eigen::MatrixXd known_values(known.size(), m), x;
-    for (size_t c = 0; c < known.size(); ++c) known_values.row(c) = g.values.row(g.row_of[var_node[known[c]]]);
+    for (size_t c = 0; c < known.size(); ++c)
+      known_values.row(c) = g.values.row(g.row_of[var_node[known[c]]]);
     system.solve(known_values, x);
     for (long id : inside_nodes) g.values.row(g.row_of[id]) = x.row(var_of[id]);
-    if (!g.values.allFinite()) throw SolverError(std::string(who) + ": the grid solve gave non-finite values");
+    if (!g.values.allFinite())
+      throw SolverError(std::string(who) + ": the grid solve gave non-finite values");
   }
   g.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -586,7 +602,8 @@ void offset_kdop_cage(const Positions& P, double margin, int subdivisions, Posit
   if (!(margin > 0 && margin <= 10))
     throw InvalidInput(std::string(who) + ": margin must be in (0, 10] (got " + std::to_string(margin) + ")");
   if (subdivisions < 0 || subdivisions > 4)
-    throw InvalidInput(std::string(who) + ": subdivisions must be in 0..4 (got " + std::to_string(subdivisions) + ")");
+    throw InvalidInput(std::string(who) + ": subdivisions must be in 0..4 (got " +
+                       std::to_string(subdivisions) + ")");
   const double diag = bbox_diagonal(P);
   if (!(diag > 0)) throw InvalidInput(std::string(who) + ": all points coincide; a cage needs an extent");
   const double offset = margin * diag, tol = 1e-9 * diag;
@@ -595,7 +612,9 @@ void offset_kdop_cage(const Positions& P, double margin, int subdivisions, Posit
 
   // The grown bounding box: its 6 faces are the axis planes of the 26-DOP.
   std::vector<Polygon> polys;
-  auto corner = [&](int i, int j, int k) { return Vec3(i ? hi.x() : lo.x(), j ? hi.y() : lo.y(), k ? hi.z() : lo.z()); };
+  auto corner = [&](int i, int j, int k) {
+    return Vec3(i ? hi.x() : lo.x(), j ? hi.y() : lo.y(), k ? hi.z() : lo.z());
+  };
   for (int axis = 0; axis < 3; ++axis)
     for (int s = 0; s < 2; ++s) {
       const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
@@ -698,7 +717,8 @@ void offset_kdop_cage(const Positions& P, double margin, int subdivisions, Posit
 
   double volume = 0;
   const std::string problem = cage_problem(cage_P, cage_F, &volume);
-  if (!problem.empty()) throw SolverError(std::string(who) + ": the generated cage is broken (a bug): " + problem);
+  if (!problem.empty())
+    throw SolverError(std::string(who) + ": the generated cage is broken (a bug): " + problem);
   if (!(volume > 0)) throw SolverError(std::string(who) + ": the generated cage is inward-oriented (a bug)");
   // Every point strictly inside: below every polygon's plane (they are the polytope's facets).
   for (const auto& loop : loops) {
@@ -721,7 +741,6 @@ void offset_kdop_cage(const Positions& P, double margin, int subdivisions, Posit
   }
 }
 
-
 // =====================================================================================================
 // The deformer
 
@@ -729,7 +748,8 @@ CageDeformer::CageDeformer(CageOptions options) : options_(std::move(options)) {
   const char* who = "cage";
   name_ = options_.coordinates == CageCoordinates::MeanValue ? "cage-mvc" : "cage-harmonic";
   if (!(options_.margin > 0 && options_.margin <= 10))
-    throw InvalidInput(std::string(who) + ": margin must be in (0, 10] (got " + std::to_string(options_.margin) + ")");
+    throw InvalidInput(std::string(who) + ": margin must be in (0, 10] (got " +
+                       std::to_string(options_.margin) + ")");
   if (options_.subdivisions < 0 || options_.subdivisions > 4)
     throw InvalidInput(std::string(who) + ": subdivisions must be in 0..4 (got " +
                        std::to_string(options_.subdivisions) + ")");
@@ -771,9 +791,10 @@ void CageDeformer::fit_basis(const Positions& P, const Region&) {
         },
         256);
     if (outside > 0)
-      prepare_warnings_.push_back(name_ + ": " + std::to_string(outside.load()) + " of " + std::to_string(P.rows()) +
-                                  " points lie outside the cage; the deformation extrapolates there (enlarge the "
-                                  "cage to enclose them)");
+      prepare_warnings_.push_back(
+          name_ + ": " + std::to_string(outside.load()) + " of " + std::to_string(P.rows()) +
+          " points lie outside the cage; the deformation extrapolates there (enlarge the "
+          "cage to enclose them)");
   }
   if (options_.coordinates == CageCoordinates::Harmonic)
     harmonic_ = std::make_unique<HarmonicCoordinates>(cage_P_, cage_F_, options_.harmonic_resolution);

@@ -26,7 +26,8 @@ enum class CageCoordinates {
 struct CageOptions {
   CageCoordinates coordinates = CageCoordinates::MeanValue;
   //! A user cage: a closed, edge-manifold, consistently oriented triangle mesh (cage_P #C×3, cage_F #T×3)
-  //! that should enclose the points; an inward-oriented cage is flipped. Empty: an offset 26-DOP is generated.
+  //! that should enclose the points; an inward-oriented cage is flipped. Empty: an offset 26-DOP is
+  //! generated.
   Positions cage_P;
   Faces cage_F;
   //! Generated cage: offset of its planes from the points, relative to their bounding-box diagonal (> 0).
@@ -91,10 +92,10 @@ class MeanValueCage {
 
  private:
   struct Face {
-    int v[3];      // vertex ids
-    int e[3];      // edge k (opposite v[k], from v[k+1] to v[k+2]) as an index into edges_
-    Vec3 n;        // unit normal
-    Vec3 q[3];     // E_k × n, E_k = c_{k+2} − c_{k+1}: a_k = r_{k+1} · q_k is twice the signed area at x
+    int v[3];   // vertex ids
+    int e[3];   // edge k (opposite v[k], from v[k+1] to v[k+2]) as an index into edges_
+    Vec3 n;     // unit normal
+    Vec3 q[3];  // E_k × n, E_k = c_{k+2} − c_{k+1}: a_k = r_{k+1} · q_k is twice the signed area at x
     double gram[3][3];  // E_j · E_k
     double edge_len[3];
     double area2;  // twice the area

@@ -32,12 +32,15 @@ std::vector<double> paper_mvc(const Positions& C, const Faces& F, const Vec3& x)
     U << u[v[0]], u[v[1]], u[v[2]];
     const double sign = U.determinant() > 0 ? 1.0 : -1.0;
     for (int i = 0; i < 3; ++i) {
-      c[i] = 2 * std::sin(h) * std::sin(h - theta[i]) / (std::sin(theta[(i + 1) % 3]) * std::sin(theta[(i + 2) % 3])) - 1;
+      c[i] = 2 * std::sin(h) * std::sin(h - theta[i]) /
+                 (std::sin(theta[(i + 1) % 3]) * std::sin(theta[(i + 2) % 3])) -
+             1;
       s[i] = sign * std::sqrt(std::max(0.0, 1 - c[i] * c[i]));
     }
     for (int i = 0; i < 3; ++i) {
       const int ip = (i + 1) % 3, im = (i + 2) % 3;
-      const double wi = (theta[i] - c[ip] * theta[im] - c[im] * theta[ip]) / (d[v[i]] * std::sin(theta[ip]) * s[im]);
+      const double wi =
+          (theta[i] - c[ip] * theta[im] - c[im] * theta[ip]) / (d[v[i]] * std::sin(theta[ip]) * s[im]);
       w[v[i]] += wi;
       total += wi;
     }
@@ -140,7 +143,8 @@ TEST_CASE("mvc: partition of unity and linear precision inside, outside, near an
     REQUIRE(outside.size() > 20);
     for (const Vec3& x : inside) check(x);
     for (const Vec3& x : outside) check(x);
-    for (const double scale : {3.0, 30.0}) check(scale * diagonal(c.P) * Vec3(0.3, -0.5, 0.81), "far outside");
+    for (const double scale : {3.0, 30.0})
+      check(scale * diagonal(c.P) * Vec3(0.3, -0.5, 0.81), "far outside");
     const double diag = diagonal(c.P);
     for (Eigen::Index f = 0; f < c.F.rows(); ++f) {
       const Vec3 a = c.P.row(c.F(f, 0)), b = c.P.row(c.F(f, 1)), cc = c.P.row(c.F(f, 2));
@@ -163,8 +167,9 @@ TEST_CASE("mvc: partition of unity and linear precision inside, outside, near an
   }
 }
 
-TEST_CASE("mvc: equal to Ju et al.'s formula at generic points, the vertex on a vertex, barycentric on a face",
-          "[cage]") {
+TEST_CASE(
+    "mvc: equal to Ju et al.'s formula at generic points, the vertex on a vertex, barycentric on a face",
+    "[cage]") {
   for (const Cage& c : test_cages()) {
     INFO(c.name);
     const MeanValueCage cage(c.P, c.F);
@@ -245,7 +250,8 @@ TEST_CASE("mvc: non-negative inside a convex cage", "[cage]") {
   }
 }
 
-TEST_CASE("harmonic coordinates: partition of unity, linear precision, non-negative and smooth inside", "[cage]") {
+TEST_CASE("harmonic coordinates: partition of unity, linear precision, non-negative and smooth inside",
+          "[cage]") {
   for (const Cage& c : test_cages()) {
     INFO(c.name);
     const HarmonicCoordinates hc(c.P, c.F, 32);
@@ -328,7 +334,8 @@ TEST_CASE("offset k-DOP cage: closed, manifold, outward and enclosing on every b
       }
       CHECK(lowest == Approx(1).margin(1e-9));
       CHECK(highest == Approx(1).margin(1e-9));
-      // The cage keeps its distance: no point is closer than the margin to a face plane (up to the 1e-9 snap).
+      // The cage keeps its distance: no point is closer than the margin to a face plane (up to the 1e-9
+      // snap).
       const double diag = diagonal(P);
       double nearest = 1e300;
       for (Eigen::Index f = 0; f < F.rows(); ++f) {

@@ -232,6 +232,35 @@ TEST_CASE("mvc: continuous across a face and through the plane of a face outside
   }
 }
 
+TEST_CASE("mvc: linear in the distance to a face plane outside the face, down to 1e-12 (the thin case)",
+          "[cage]") {
+  // A unit cube; points in the plane z = 0 beyond the bottom face, then lifted by η. Every face in that plane
+  // is seen edge-on; the coordinates are smooth there, so w(η) − w(0) ≈ η w'(0) for every η. Ju et al.'s
+  // formula loses it below η ≈ 1e-6 (its terms cancel to O(η²)).
+  Positions C(8, 3);
+  for (int i = 0; i < 8; ++i) C.row(i) << (i & 1), ((i >> 1) & 1), ((i >> 2) & 1);
+  Faces F(12, 3);
+  F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3,
+      7, 5;
+  REQUIRE_NOTHROW(check_cage(C, F, "test"));
+  const MeanValueCage cage(C, F);
+  MeanValueWorkspace ws;
+  std::vector<double> w0(8), w(8);
+  for (const Vec3& base : {Vec3(1.7, 0.4, 0), Vec3(-0.5, 1.3, 0), Vec3(0.3, -0.2, 0)}) {
+    INFO(base.transpose());
+    cage.coordinates(base, ws, w0.data());
+    std::vector<double> slope;
+    for (const double eta : {1e-4, 1e-6, 1e-8, 1e-10, 1e-12}) {
+      cage.coordinates(base - eta * Vec3::UnitZ(), ws, w.data());
+      double change = 0;
+      for (int l = 0; l < 8; ++l) change = std::max(change, std::abs(w[l] - w0[l]));
+      slope.push_back(change / eta);
+    }
+    REQUIRE(slope.front() > 1e-3);
+    for (const double s : slope) CHECK(s == Approx(slope.front()).epsilon(1e-2));  // at 1e-12: round-off of w
+  }
+}
+
 TEST_CASE("mvc: non-negative inside a convex cage", "[cage]") {
   for (const Cage& c : test_cages()) {
     if (!c.convex) continue;

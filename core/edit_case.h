@@ -22,13 +22,21 @@ struct EditCase {
   std::vector<Mat4> transforms;    //!< one affine 4x4 per handle (empty when loaded without them)
   //! Built-in scenes: the Loop control mesh the surface refines (for a subdivision base); null for files.
   std::shared_ptr<const ControlMesh> control;
+  std::string path;  //!< the mesh file, empty for built-in scenes
+  //! Why F is not a manifold, orientable triangle mesh with at least one face, in words with ids (see
+  //! SurfaceCheck::problem, e.g. "no faces (a point cloud)"); empty when it is one. Surface methods need
+  //! one (require_surface); space methods deform any input.
+  std::string surface_problem;
 };
 
 //! A built-in scene (core/scenes.h) at about `resolution` vertices as an edit case.
 //! \throw InvalidInput for an unknown scene name.
 EditCase scene_case(const std::string& scene, int resolution);
 
-//! A mesh file with a .sel (or .dmat) region and a .def file. \throw InvalidInput naming the file, or the
+//! A mesh file with a .sel (or .dmat) region and a .def file. The file's vertices are kept exactly (count
+//! and order) and its faces as triangles, whatever they form (load_soup): point clouds, soups and
+//! non-manifold meshes load, with the reason recorded in surface_problem. Faces wound against their
+//! neighbours are turned over where the surface is orientable. \throw InvalidInput naming the file, or the
 //! mismatch between the handle count of the region and the number of matrices.
 EditCase file_case(const std::string& mesh, const std::string& sel, const std::string& def);
 
@@ -36,5 +44,10 @@ EditCase file_case(const std::string& mesh, const std::string& sel, const std::s
 //! empty `def` the transforms (for commands that need neither, e.g. a low-pass decomposition).
 //! \throw InvalidInput naming the file, or the handle-count mismatch when both sel and def are given.
 EditCase load_edit_case(const std::string& mesh, const std::string& sel = "", const std::string& def = "");
+
+//! Refuses an edit that a surface method (or operation) cannot take: method is its name for the message.
+//! \throw InvalidInput "<method> is a surface method and <file> is not a manifold triangle mesh:
+//! <problem>. Space methods deform any input: ..." when edit.surface_problem is not empty.
+void require_surface(const EditCase& edit, const std::string& method);
 
 }  // namespace msd

@@ -1,56 +1,69 @@
 #include "core/mesh_info.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <numeric>
 #include <vector>
 
 #include "core/laplacian.h"
+#include "core/surface_check.h"
 
 namespace msd {
 
-MeshInfo mesh_info(const Mesh& mesh, const LoadReport* report) {
+MeshInfo mesh_info(const Positions& P, const Faces& F) {
   MeshInfo info;
-  info.vertices = static_cast<int>(mesh.n_vertices());
-  info.faces = static_cast<int>(mesh.n_faces());
-  info.edges = static_cast<int>(mesh.n_edges());
-  info.euler_characteristic = info.vertices - info.edges + info.faces;
-  const Positions P = positions(mesh);
+  Faces oriented = F;
+  const SurfaceCheck check = check_surface(P, oriented);
+  info.vertices = check.vertices;
+  info.faces = check.faces;
+  info.components = check.components;
+  info.unreferenced_vertices = check.unreferenced_vertices;
+  info.nonmanifold_edges = static_cast<int>(check.nonmanifold_edges.size());
+  info.nonmanifold_vertices = static_cast<int>(check.nonmanifold_vertices.size());
+  info.nonorientable_components = static_cast<int>(check.nonorientable_faces.size());
+  info.flipped_faces = check.flipped_faces;
+  info.surface_problem = check.problem();
   if (info.vertices > 0) {
     info.bbox_min = P.colwise().minCoeff();
     info.bbox_max = P.colwise().maxCoeff();
   }
-  // Components by union-find over edges of faces.
+  // Distinct edges as sorted (min, max) keys: their lengths, and the boundary ones joined into loops.
+  std::vector<std::uint64_t> keys;
+  keys.reserve(3 * static_cast<size_t>(F.rows()));
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const auto [a, b] = std::minmax(F(f, k), F(f, (k + 1) % 3));
+      if (a != b) keys.push_back(std::uint64_t(a) << 32 | std::uint64_t(b));
+    }
+  std::sort(keys.begin(), keys.end());
   std::vector<int> parent(info.vertices);
   std::iota(parent.begin(), parent.end(), 0);
   auto find = [&](int v) {
     while (parent[v] != v) v = parent[v] = parent[parent[v]];
     return v;
   };
+  std::vector<char> on_boundary(info.vertices, 0);
   double total_length = 0;
-  for (auto e : mesh.edges()) {
-    const auto h = mesh.halfedge_handle(e, 0);
-    const int a = mesh.from_vertex_handle(h).idx(), b = mesh.to_vertex_handle(h).idx();
-    parent[find(a)] = find(b);
-    total_length += mesh.calc_edge_length(e);
+  for (size_t i = 0; i < keys.size();) {
+    size_t j = i + 1;
+    while (j < keys.size() && keys[j] == keys[i]) ++j;
+    const int a = static_cast<int>(keys[i] >> 32), b = static_cast<int>(keys[i] & 0xffffffffu);
+    total_length += (P.row(a) - P.row(b)).norm();
+    ++info.edges;
+    if (j - i == 1) {
+      ++info.boundary_edges;
+      parent[find(a)] = find(b);
+      on_boundary[a] = on_boundary[b] = 1;
+    }
+    i = j;
   }
   if (info.edges > 0) info.mean_edge_length = total_length / info.edges;
-  for (auto v : mesh.vertices()) {
-    if (mesh.is_isolated(v)) {
-      ++info.isolated_vertices;
-      continue;
-    }
-    if (find(v.idx()) == v.idx()) ++info.components;
-    if (!mesh.is_manifold(v)) ++info.nonmanifold_vertices;
-  }
-  // Boundary loops: walk each unvisited boundary halfedge cycle.
-  std::vector<char> seen(mesh.n_halfedges(), 0);
-  for (auto h : mesh.halfedges()) {
-    if (!h.is_boundary() || seen[h.idx()]) continue;
-    ++info.boundary_loops;
-    for (auto g = h; !seen[g.idx()]; g = g.next()) seen[g.idx()] = 1;
-  }
-  info.degenerate_faces = cotan_laplacian(P, faces(mesh)).degenerate_faces;
-  if (report) info.nonmanifold_faces = report->nonmanifold_faces;
+  info.euler_characteristic = info.vertices - info.edges + info.faces;
+  for (int v = 0; v < info.vertices; ++v) info.boundary_loops += on_boundary[v] && find(v) == v;
+  if (F.rows() > 0) info.degenerate_faces = cotan_laplacian(P, F).degenerate_faces;
   return info;
 }
+
+MeshInfo mesh_info(const Mesh& mesh) { return mesh_info(positions(mesh), faces(mesh)); }
 
 }  // namespace msd

@@ -1,25 +1,28 @@
-// OpenMesh wants its IO header before any mesh kernel header.
-#include <OpenMesh/Core/IO/MeshIO.hh>
-
 #include "core/mesh_io.h"
 
+#include <OpenMesh/Core/System/omstream.hh>
+
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 #include "core/atomic_file.h"
 #include "core/errors.h"
+#include "core/surface_check.h"
 
 namespace msd {
 namespace {
 
-// A polygon soup as read from a file, with the source line of every polygon for error messages.
-struct Soup {
+// A file's vertices and polygons as read, with the source line of every polygon for error messages.
+struct FileContents {
   std::vector<Vec3> points;
   std::vector<int> corners, offsets{0}, lines;
 };
@@ -27,7 +30,9 @@ struct Soup {
 // Splits text into lines with '#' comments stripped, numbering them from 1.
 class LineReader {
  public:
-  LineReader(std::string_view text, std::string path) : text_(text), path_(std::move(path)) {}
+  // who: the public function reading, named in messages
+  LineReader(std::string_view text, std::string path, std::string who)
+      : text_(text), path_(std::move(path)), who_(std::move(who)) {}
   // Next line that has content; false at the end of the text.
   bool next(std::string_view& line) {
     while (pos_ < text_.size()) {
@@ -45,12 +50,12 @@ class LineReader {
   }
   int number() const { return number_; }
   [[noreturn]] void fail(const std::string& what) const {
-    throw InvalidInput("load_mesh: " + path_ + " line " + std::to_string(number_) + ": " + what);
+    throw InvalidInput(who_ + ": " + path_ + " line " + std::to_string(number_) + ": " + what);
   }
 
  private:
   std::string_view text_;
-  std::string path_;
+  std::string path_, who_;
   size_t pos_ = 0;
   int number_ = 0;
 };
@@ -85,10 +90,10 @@ Vec3 parse_point(std::string_view& line, const LineReader& reader) {
   return p;
 }
 
-Soup read_off(std::string_view text, const std::string& path) {
-  LineReader reader(text, path);
+FileContents read_off(std::string_view text, const std::string& path, const std::string& who) {
+  LineReader reader(text, path, who);
   std::string_view line;
-  if (!reader.next(line)) throw InvalidInput("load_mesh: " + path + " is empty");
+  if (!reader.next(line)) throw InvalidInput(who + ": " + path + " is empty");
   std::string_view head = next_token(line);
   // OFF, COFF, NOFF, CNOFF, STOFF ...: the header ends in "OFF"; "OFF BINARY" is not supported.
   if (head.size() < 3 || head.substr(head.size() - 3) != "OFF" || head.size() > 6)
@@ -98,7 +103,7 @@ Soup read_off(std::string_view text, const std::string& path) {
   const long nv = parse_number<long>(next_token(line), reader, "the vertex count");
   const long nf = parse_number<long>(next_token(line), reader, "the face count");
   if (nv < 0 || nf < 0) reader.fail("negative vertex or face count");
-  Soup soup;
+  FileContents soup;
   soup.points.reserve(std::min(nv, 1L << 26));
   for (long i = 0; i < nv; ++i) {
     if (!reader.next(line)) reader.fail("file ends after " + std::to_string(i) + " of " + std::to_string(nv) + " vertices");
@@ -115,10 +120,10 @@ Soup read_off(std::string_view text, const std::string& path) {
   return soup;
 }
 
-Soup read_obj(std::string_view text, const std::string& path) {
-  LineReader reader(text, path);
+FileContents read_obj(std::string_view text, const std::string& path, const std::string& who) {
+  LineReader reader(text, path, who);
   std::string_view line;
-  Soup soup;
+  FileContents soup;
   while (reader.next(line)) {
     const std::string_view key = next_token(line);
     if (key == "v") {
@@ -146,11 +151,12 @@ Soup read_obj(std::string_view text, const std::string& path) {
 // skipped. Our own reader because OpenMesh's stores coordinates in single precision.
 class PlyReader {
  public:
-  PlyReader(std::string_view text, std::string path) : text_(text), path_(std::move(path)) {}
+  PlyReader(std::string_view text, std::string path, std::string who)
+      : text_(text), path_(std::move(path)), who_(std::move(who)) {}
 
-  Soup read() {
+  FileContents read() {
     parse_header();
-    Soup soup;
+    FileContents soup;
     for (const Element& e : elements_) {
       for (long i = 0; i < e.count; ++i) {
         Vec3 p = Vec3::Zero();
@@ -195,13 +201,14 @@ class PlyReader {
   };
 
   [[noreturn]] void fail(const std::string& what) const {
-    throw InvalidInput("load_mesh: " + path_ + (binary_ ? "" : " line " + std::to_string(line_)) + ": " + what);
+    throw InvalidInput(who_ + ": " + path_ + (binary_ ? "" : " line " + std::to_string(line_)) + ": " + what);
   }
 
   std::string_view header_token(std::string_view& line) { return next_token(line); }
 
   void parse_header() {
-    if (text_.substr(0, 3) != "ply") throw InvalidInput("load_mesh: " + path_ + " is not a PLY file (it does not start with 'ply')");
+    if (text_.substr(0, 3) != "ply")
+      throw InvalidInput(who_ + ": " + path_ + " is not a PLY file (it does not start with 'ply')");
     while (true) {
       const size_t end = text_.find('\n', pos_);
       if (end == std::string_view::npos) fail("header has no 'end_header'");
@@ -285,94 +292,159 @@ class PlyReader {
   }
 
   std::string_view text_;
-  std::string path_;
+  std::string path_, who_;
   size_t pos_ = 0;
   int line_ = 0;
   bool binary_ = false;
   std::vector<Element> elements_;
 };
 
-Soup read_stl(const std::string& path, std::string_view text) {
-  // Check the magic ourselves: OpenMesh's reader only says "failed".
-  if (text.substr(0, 5) != "solid") {
-    if (text.size() < 84) throw InvalidInput("load_mesh: " + path + " is too short to be a binary STL file");
-    std::uint32_t count;
-    std::memcpy(&count, text.data() + 80, 4);
-    if (text.size() != 84 + 50ull * count)
-      throw InvalidInput("load_mesh: " + path + " is not an STL file (binary size does not match its " +
-                         std::to_string(count) + " triangles, and it does not start with 'solid')");
+// STL keeps no vertex list: corners with the same coordinates are one vertex, numbered in the order they
+// first appear (as OpenMesh's reader numbers them). Our own reader because OpenMesh's detaches faces it
+// cannot add to a manifold mesh, giving them copies of their vertices.
+class StlVertices {
+ public:
+  int index(Vec3 p) {
+    p.array() += 0.0;  // -0 and +0 are one coordinate
+    const auto [it, added] = ids_.try_emplace(Key{p[0], p[1], p[2]}, static_cast<int>(points.size()));
+    if (added) points.push_back(p);
+    return it->second;
   }
-  Mesh mesh;
-  OpenMesh::IO::Options opt;
-  omerr().disable();
-  omlog().disable();
-  const bool ok = OpenMesh::IO::read_mesh(mesh, path, opt);
-  omerr().enable();
-  omlog().enable();
-  if (!ok) throw InvalidInput("load_mesh: " + path + " could not be parsed as STL (malformed file)");
-  Soup soup;
-  for (auto v : mesh.vertices()) {
-    const auto& p = mesh.point(v);
-    soup.points.emplace_back(p[0], p[1], p[2]);
+  std::vector<Vec3> points;
+
+ private:
+  using Key = std::array<double, 3>;
+  struct Hash {
+    size_t operator()(const Key& k) const {
+      size_t h = 0;
+      for (double x : k) {
+        std::uint64_t bits;
+        std::memcpy(&bits, &x, sizeof(bits));
+        h = (h ^ bits) * 0x100000001b3ull + (h >> 29);
+      }
+      return h;
+    }
+  };
+  std::unordered_map<Key, int, Hash> ids_;
+};
+
+FileContents read_stl(std::string_view text, const std::string& path, const std::string& who) {
+  FileContents soup;
+  StlVertices vertices;
+  std::uint32_t count = 0;
+  if (text.size() >= 84) std::memcpy(&count, text.data() + 80, 4);
+  const bool binary = text.size() >= 84 && text.size() == 84 + 50ull * count;
+  if (binary) {  // even when its 80-byte header starts with "solid", as some writers do
+    for (std::uint32_t t = 0; t < count; ++t) {
+      float xyz[12];  // normal, then three corners
+      std::memcpy(xyz, text.data() + 84 + 50ull * t, sizeof(xyz));
+      for (int k = 1; k <= 3; ++k) {
+        const Vec3 p(xyz[3 * k], xyz[3 * k + 1], xyz[3 * k + 2]);
+        if (!p.allFinite())
+          throw InvalidInput(who + ": " + path + ": triangle " + std::to_string(t) +
+                             " has a non-finite coordinate");
+        soup.corners.push_back(vertices.index(p));
+      }
+      soup.offsets.push_back(static_cast<int>(soup.corners.size()));
+      soup.lines.push_back(0);
+    }
+  } else if (text.substr(0, 5) == "solid") {
+    // ASCII: solid / facet normal / outer loop / vertex x y z ... / endloop / endfacet / endsolid.
+    LineReader reader(text, path, who);
+    std::string_view line;
+    int loop_corners = -1;  // -1 outside a loop
+    while (reader.next(line)) {
+      const std::string_view key = next_token(line);
+      if (key == "vertex") {
+        if (loop_corners < 0) reader.fail("'vertex' outside an 'outer loop'");
+        soup.corners.push_back(vertices.index(parse_point(line, reader)));
+        ++loop_corners;
+      } else if (key == "outer") {
+        loop_corners = 0;
+      } else if (key == "endloop") {
+        if (loop_corners < 3)
+          reader.fail("facet has " + std::to_string(std::max(loop_corners, 0)) +
+                      " corners (at least 3 needed)");
+        soup.offsets.push_back(static_cast<int>(soup.corners.size()));
+        soup.lines.push_back(reader.number());
+        loop_corners = -1;
+      } else if (key != "solid" && key != "facet" && key != "endfacet" && key != "endsolid") {
+        reader.fail("expected an ASCII STL keyword, found '" + std::string(key.substr(0, 40)) + "'");
+      }
+    }
+    if (loop_corners >= 0) reader.fail("file ends inside a facet");
+  } else if (text.size() < 84) {
+    throw InvalidInput(who + ": " + path + " is too short to be a binary STL file");
+  } else {
+    throw InvalidInput(who + ": " + path + " is not an STL file (binary size does not match its " +
+                       std::to_string(count) + " triangles, and it does not start with 'solid')");
   }
-  for (auto f : mesh.faces()) {
-    for (auto v : mesh.fv_range(f)) soup.corners.push_back(v.idx());
-    soup.offsets.push_back(static_cast<int>(soup.corners.size()));
-    soup.lines.push_back(0);
-  }
-  for (size_t i = 0; i < soup.points.size(); ++i)
-    if (!soup.points[i].allFinite())
-      throw InvalidInput("load_mesh: " + path + ": vertex " + std::to_string(i) + " has a non-finite coordinate");
+  soup.points = std::move(vertices.points);
   return soup;
 }
 
-Mesh build_mesh(const Soup& soup, const std::string& path, LoadReport& report) {
+FileContents read_contents(const std::string& path, const std::string& who) {
+  const std::string ext = file_extension(path);
+  if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
+    throw InvalidInput(who + ": " + path + ": unknown format '" + ext + "' (supported: .off .obj .ply .stl)");
+  if (std::filesystem::is_directory(path))
+    throw InvalidInput(who + ": " + path + " is a folder, not a mesh file");
+  const std::string text = read_file(path, who.c_str());
+  if (ext == ".off") return read_off(text, path, who);
+  if (ext == ".obj") return read_obj(text, path, who);
+  if (ext == ".ply") return PlyReader(text, path, who).read();
+  return read_stl(text, path, who);
+}
+
+// The file's vertices as they are; its polygons as triangles (fans from their first corner), without
+// faces that repeat a vertex index or the vertex set of an earlier triangle.
+TriangleSoup triangulate(const FileContents& soup, const std::string& path, const std::string& who,
+                         LoadReport& report) {
   const int nv = static_cast<int>(soup.points.size());
   const int npoly = static_cast<int>(soup.offsets.size()) - 1;
-  if (nv == 0) throw InvalidInput("load_mesh: " + path + " has no vertices");
-  if (npoly == 0) throw InvalidInput("load_mesh: " + path + " has no faces (a point cloud is not a mesh)");
-  auto where = [&](int f) {
-    return path + (soup.lines[f] > 0 ? " line " + std::to_string(soup.lines[f]) : "") + ": face " + std::to_string(f);
-  };
-  Mesh mesh;
-  mesh.reserve(nv, 3 * npoly, 2 * npoly);
-  for (const Vec3& p : soup.points) mesh.add_vertex(Mesh::Point(p[0], p[1], p[2]));
-  omerr().disable();  // OpenMesh prints a line per non-manifold face; we count them instead
-  std::vector<Mesh::VertexHandle> corner;
+  if (nv == 0) throw InvalidInput(who + ": " + path + " has no vertices");
+  TriangleSoup out;
+  out.P.resize(nv, 3);
+  for (int i = 0; i < nv; ++i) out.P.row(i) = soup.points[i];
+  std::vector<std::array<int, 3>> triangles;
+  triangles.reserve(soup.corners.size() > 2 * static_cast<size_t>(npoly) ? soup.corners.size() - 2 * npoly
+                                                                         : 0);
+  std::vector<int> sorted;
   for (int f = 0; f < npoly; ++f) {
-    corner.clear();
-    for (int k = soup.offsets[f]; k < soup.offsets[f + 1]; ++k) {
-      const int idx = soup.corners[k];
-      if (idx < 0 || idx >= nv) {
-        omerr().enable();
-        throw InvalidInput("load_mesh: " + where(f) + " has vertex index " + std::to_string(idx) +
+    const int* corner = soup.corners.data() + soup.offsets[f];
+    const int n = soup.offsets[f + 1] - soup.offsets[f];
+    for (int k = 0; k < n; ++k)
+      if (corner[k] < 0 || corner[k] >= nv)
+        throw InvalidInput(who + ": " + path +
+                           (soup.lines[f] > 0 ? " line " + std::to_string(soup.lines[f]) : "") + ": face " +
+                           std::to_string(f) + " has vertex index " + std::to_string(corner[k]) +
                            " out of range [0, " + std::to_string(nv) + ")");
-      }
-      corner.push_back(mesh.vertex_handle(idx));
-    }
-    std::vector<Mesh::VertexHandle> sorted = corner;
+    sorted.assign(corner, corner + n);
     std::sort(sorted.begin(), sorted.end());
     if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
       ++report.degenerate_faces_skipped;
       continue;
     }
-    if (corner.size() > 3) ++report.polygons_triangulated;
-    for (size_t k = 1; k + 1 < corner.size(); ++k) {
-      Mesh::VertexHandle tri[3] = {corner[0], corner[k], corner[k + 1]};
-      if (mesh.add_face(tri[0], tri[1], tri[2]).is_valid()) continue;
-      ++report.nonmanifold_faces;
-      for (auto& v : tri) {
-        // A copy: add_vertex may reallocate the point array that mesh.point(v) refers into.
-        const Mesh::Point p = mesh.point(v);
-        v = mesh.add_vertex(p);
-        ++report.duplicated_vertices;
-      }
-      mesh.add_face(tri[0], tri[1], tri[2]);
-    }
+    if (n > 3) ++report.polygons_triangulated;
+    for (int k = 1; k + 1 < n; ++k) triangles.push_back({corner[0], corner[k], corner[k + 1]});
   }
-  omerr().enable();
-  if (mesh.n_faces() == 0) throw InvalidInput("load_mesh: " + path + " has no valid faces (all are degenerate)");
-  return mesh;
+  // Duplicates: sort the vertex sets, keep the first triangle of each.
+  std::vector<std::array<int, 4>> keys(triangles.size());
+  for (size_t t = 0; t < triangles.size(); ++t) {
+    keys[t] = {triangles[t][0], triangles[t][1], triangles[t][2], static_cast<int>(t)};
+    std::sort(keys[t].begin(), keys[t].begin() + 3);
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<char> keep(triangles.size(), 1);
+  for (size_t i = 1; i < keys.size(); ++i)
+    if (std::equal(keys[i].begin(), keys[i].begin() + 3, keys[i - 1].begin())) {
+      keep[keys[i][3]] = 0;
+      ++report.duplicate_faces_dropped;
+    }
+  out.F.resize(static_cast<Eigen::Index>(triangles.size()) - report.duplicate_faces_dropped, 3);
+  for (size_t t = 0, row = 0; t < triangles.size(); ++t)
+    if (keep[t]) out.F.row(row++) << triangles[t][0], triangles[t][1], triangles[t][2];
+  return out;
 }
 
 // Shortest decimal that reads back to the same double.
@@ -403,23 +475,46 @@ std::string file_extension(const std::string& path) {
   return ext;
 }
 
-Mesh load_mesh(const std::string& path, LoadReport* report) {
-  const std::string ext = file_extension(path);
-  if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
-    throw InvalidInput("load_mesh: " + path + ": unknown format '" + ext + "' (supported: .off .obj .ply .stl)");
-  if (std::filesystem::is_directory(path)) throw InvalidInput("load_mesh: " + path + " is a folder, not a mesh file");
-  const std::string text = read_file(path, "load_mesh");
-  Soup soup;
-  if (ext == ".off")
-    soup = read_off(text, path);
-  else if (ext == ".obj")
-    soup = read_obj(text, path);
-  else if (ext == ".ply")
-    soup = PlyReader(text, path).read();
-  else
-    soup = read_stl(path, text);
+TriangleSoup load_soup(const std::string& path, LoadReport* report) {
   LoadReport local;
-  Mesh mesh = build_mesh(soup, path, report ? *report : local);
+  LoadReport& r = report ? *report : local;
+  r = LoadReport{};
+  return triangulate(read_contents(path, "load_soup"), path, "load_soup", r);
+}
+
+Mesh load_mesh(const std::string& path, LoadReport* report) {
+  LoadReport local;
+  LoadReport& r = report ? *report : local;
+  r = LoadReport{};
+  TriangleSoup soup = triangulate(read_contents(path, "load_mesh"), path, "load_mesh", r);
+  const std::string space_methods = "space methods (lattice, cage-mvc, cage-harmonic, rbf) deform such input";
+  if (soup.F.rows() == 0 && r.degenerate_faces_skipped > 0)
+    throw InvalidInput("load_mesh: " + path + " has no valid faces (all " +
+                       std::to_string(r.degenerate_faces_skipped) + " repeat a vertex index)");
+  if (soup.F.rows() == 0)
+    throw InvalidInput("load_mesh: " + path + " has no faces (a point cloud is not a mesh; " + space_methods +
+                       ")");
+  const SurfaceCheck check = check_surface(soup.P, soup.F);
+  r.faces_flipped = check.flipped_faces;
+  if (!check.is_manifold_mesh())
+    throw TopologyError("load_mesh: " + path + " is not a manifold triangle mesh: " + check.problem() + "; " +
+                        space_methods);
+  Mesh mesh;
+  const int nv = static_cast<int>(soup.P.rows()), nf = static_cast<int>(soup.F.rows());
+  mesh.reserve(nv, 3 * nf, nf);
+  for (int i = 0; i < nv; ++i) mesh.add_vertex(Mesh::Point(soup.P(i, 0), soup.P(i, 1), soup.P(i, 2)));
+  for (int f = 0; f < nf; ++f) {
+    const int a = soup.F(f, 0), b = soup.F(f, 1), c = soup.F(f, 2);
+    omerr().disable();
+    const bool added =
+        mesh.add_face(mesh.vertex_handle(a), mesh.vertex_handle(b), mesh.vertex_handle(c)).is_valid();
+    omerr().enable();
+    // check_surface found the faces manifold and oriented them, so OpenMesh should take every one.
+    if (!added)
+      throw TopologyError("load_mesh: " + path + ": OpenMesh refused face " + std::to_string(f) + " (" +
+                          std::to_string(a) + ", " + std::to_string(b) + ", " + std::to_string(c) +
+                          ") of a surface found manifold; " + space_methods);
+  }
   return mesh;
 }
 
@@ -438,6 +533,11 @@ void save_mesh(const Positions& P, const Faces& F, const std::string& path, cons
   std::string out;
   out.reserve(static_cast<size_t>(nv) * 64 + static_cast<size_t>(nf) * 32 + 256);
   if (ext == ".stl") {
+    // STL has no vertex list: a point cloud would come back as nothing.
+    if (nf == 0)
+      throw InvalidInput("save_mesh: " + path +
+                         ": STL stores triangles only and there are none (a point cloud): "
+                         "use .ply, .off or .obj; nothing written");
     out.assign(80, '\0');
     std::memcpy(out.data(), "msdeform binary STL", 19);
     const std::uint32_t count = static_cast<std::uint32_t>(nf);

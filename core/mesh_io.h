@@ -1,5 +1,6 @@
 #pragma once
-//! \file Loading and saving triangle meshes: OFF, OBJ, PLY, STL (chosen by the file extension).
+//! \file Loading and saving meshes, soups and point clouds: OFF, OBJ, PLY, STL (chosen by the file
+//! extension).
 
 #include <string>
 
@@ -7,19 +8,37 @@
 
 namespace msd {
 
-//! What load_mesh had to do to turn the file into a manifold triangle mesh.
+//! What loading did to the file's faces. The file's vertices are never changed, added or reordered.
 struct LoadReport {
-  int polygons_triangulated = 0;    //!< faces with more than 3 corners, split into fans from their first corner
-  int degenerate_faces_skipped = 0; //!< faces that repeat a vertex index (dropped)
-  int nonmanifold_faces = 0;        //!< faces that would make an edge or vertex non-manifold
-  int duplicated_vertices = 0;      //!< copies appended after the file's vertices to add those faces
+  int polygons_triangulated = 0;  //!< faces with more than 3 corners, split into fans from their first corner
+  int degenerate_faces_skipped = 0;  //!< faces that repeat a vertex index (dropped)
+  int duplicate_faces_dropped = 0;   //!< triangles with the vertex set of an earlier one (dropped)
+  int faces_flipped = 0;             //!< load_mesh: triangles turned over to agree with their neighbours
 };
 
-//! Loads a mesh. The file's vertices keep their order and indices exactly (selection files index them);
-//! polygons are triangulated; faces that cannot be added to a manifold mesh get private copies of their
-//! vertices appended after the file's vertices (counted in the report).
-//! \throw InvalidInput with file and line for: a missing or unreadable file, an unknown extension, a
-//! malformed header or number, a non-finite coordinate, a face index out of range, an empty mesh.
+//! A file's vertices and triangles, whatever they form: a point cloud, a soup, a non-manifold or
+//! inconsistently oriented mesh.
+struct TriangleSoup {
+  Positions P;  //!< #V by 3: the file's vertices, in its order
+  Faces F;      //!< #F by 3 triangles in the file's face order (#F may be 0)
+};
+
+//! Loads a file as it is: its vertices exactly (count and order: selection files index them) and its
+//! faces as triangles (polygons split into fans from their first corner; faces that repeat a vertex index
+//! and triangles with the vertex set of an earlier one dropped, counted in the report). No face is needed:
+//! an OFF with 0 faces, a PLY with only a vertex element or an OBJ with only `v` lines is a point cloud.
+//! Orientation and manifoldness are not looked at (see check_surface). An STL's vertices are its distinct
+//! corner positions in the order they first appear.
+//! 	hrow InvalidInput with file and line for: a missing or unreadable file, an unknown extension, a
+//! malformed header or number, a non-finite coordinate, a face index out of range, no vertices at all.
+TriangleSoup load_soup(const std::string& path, LoadReport* report = nullptr);
+
+//! Loads a manifold triangle mesh: load_soup, then check_surface (core/surface_check.h). Faces wound
+//! against their neighbours are turned over (counted in the report); the file's vertices keep their
+//! order and count exactly.
+//! 	hrow InvalidInput as load_soup, and for a file without faces (a point cloud).
+//! 	hrow TopologyError naming the file and the edge, vertex or face ids for a non-manifold edge or
+//! vertex or a non-orientable component (space methods take such input: load it with load_soup).
 Mesh load_mesh(const std::string& path, LoadReport* report = nullptr);
 
 //! Optional extras for save_mesh.
@@ -29,9 +48,11 @@ struct SaveOptions {
 };
 
 //! Saves (P, F) to path, format by extension (.off .obj .ply .stl). Written to a temporary file and
-//! renamed, so a failed save leaves any existing file untouched. Full double precision.
+//! renamed, so a failed save leaves any existing file untouched. Full double precision (STL: single).
+//! Any face list is written as it is: a soup, or none at all (a point cloud) in .off, .obj and .ply.
+//! STL keeps no vertex list: vertices no face uses are lost, and a point cloud is refused.
 //! \throw InvalidInput for an unknown extension, a scalar with a non-PLY format or of the wrong size,
-//! non-finite positions, or an unwritable path.
+//! non-finite positions, an STL without faces, or an unwritable path.
 void save_mesh(const Positions& P, const Faces& F, const std::string& path, const SaveOptions& options = {});
 void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& options = {});
 

@@ -40,6 +40,10 @@ class RbfDeformer : public SpaceDeformer {
   bool exact_constraints() const override { return false; }
   void prepare_solve(const Positions& P, const std::vector<int>& constrained) override;
   void solve(const Eigen::MatrixXd& values, Eigen::MatrixXd& coefficients) const override;
+  std::string overshoot_advice() const override {
+    return "constraints close together with different motions make the triharmonic map overshoot between and "
+           "beyond them: move them apart, or use a surface method";
+  }
 
  private:
   RbfOptions options_;

@@ -1,20 +1,30 @@
 #include "deformation/space_deformer.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdio>
 
 #include "core/checks.h"
 #include "core/errors.h"
+#include "core/mesh.h"
 #include "core/parallel.h"
 #include "core/solver.h"
 
 namespace msd {
+namespace {
+constexpr int kDenseLimit = 4000;
+// A frame warns when some point moves this many times farther than the farthest-moving constraint target.
+constexpr double kOvershoot = 2.0;
+}  // namespace
 
 // The least-norm solve of (9.13): N (#C×m) and the factor of NᵀN + εI; the affine fit's
 // E = (XᵀX + Λ)⁻¹Xᵀ (4×#C) on centred, scaled coordinates X = [(p − centre)/scale, 1].
 struct SpaceDeformer::LeastNorm {
   Eigen::SparseMatrix<double, Eigen::RowMajor> N;
-  SparseSPDSolver normal;
+  Eigen::LLT<Eigen::MatrixXd> dense;  // up to kDenseLimit basis functions
+  SparseSPDSolver sparse;             // beyond
   bool affine_part = true;
   Eigen::MatrixXd E;
   Vec3 centre = Vec3::Zero();
@@ -44,21 +54,38 @@ void SpaceDeformer::prepare_solve(const Positions& P, const std::vector<int>& co
   const int m = basis_size();
   const int nc = static_cast<int>(constrained.size());
   // N: the basis at the constrained vertices.
-  std::vector<Eigen::Triplet<double>> entries;
-  BasisRow row;
-  for (int c = 0; c < nc; ++c) {
-    basis(P.row(constrained[c]).transpose(), row);
-    for (size_t j = 0; j < row.index.size(); ++j) entries.emplace_back(c, row.index[j], row.value[j]);
-  }
+  std::vector<BasisRow> rows(nc);
+  parallel_for_chunks(nc, [&](long c0, long c1) {
+    for (long c = c0; c < c1; ++c) basis(P.row(constrained[c]).transpose(), rows[c]);
+  }, 256);
   ln->N.resize(nc, m);
-  ln->N.setFromTriplets(entries.begin(), entries.end());
-  SparseMatrix normal = SparseMatrix(ln->N.transpose()) * ln->N;
-  double mean = normal.diagonal().sum() / m;
-  if (!(mean > 0)) mean = 1;
-  SparseMatrix shift(m, m);
-  shift.setIdentity();
-  normal += (options.regularization * mean) * shift;
-  ln->normal.factor(normal);
+  Eigen::VectorXi sizes(nc);
+  for (int c = 0; c < nc; ++c) sizes[c] = static_cast<int>(rows[c].index.size());
+  ln->N.reserve(sizes);
+  for (int c = 0; c < nc; ++c)
+    for (size_t j = 0; j < rows[c].index.size(); ++j) ln->N.insert(c, rows[c].index[j]) = rows[c].value[j];
+  ln->N.makeCompressed();
+  std::vector<BasisRow>().swap(rows);
+  // NᵀN + ε·mean(diag)·I: accumulated densely for up to kDenseLimit basis functions (a lattice of 8
+  // cells or a cage), by a sparse product beyond.
+  if (m <= kDenseLimit) {
+    Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m, m);
+    for (int c = 0; c < nc; ++c)
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator a(ln->N, c); a; ++a)
+        for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator b(ln->N, c); b; ++b)
+          if (b.col() <= a.col()) normal(a.col(), b.col()) += a.value() * b.value();
+    double mean = normal.diagonal().sum() / m;
+    normal.diagonal().array() += options.regularization * (mean > 0 ? mean : 1.0);
+    ln->dense.compute(normal.selfadjointView<Eigen::Lower>());
+    if (ln->dense.info() != Eigen::Success) throw SolverError(name() + ": the least-norm normal equations are singular");
+  } else {
+    SparseMatrix normal = SparseMatrix(ln->N.transpose()) * ln->N;
+    double mean = normal.diagonal().sum() / m;
+    SparseMatrix shift(m, m);
+    shift.setIdentity();
+    normal += (options.regularization * (mean > 0 ? mean : 1.0)) * shift;
+    ln->sparse.factor(normal);
+  }
   // The affine fit, on coordinates centred at the constraints' mean and scaled by their RMS radius.
   ln->affine_part = options.affine_part;
   if (ln->affine_part) {
@@ -93,11 +120,12 @@ void SpaceDeformer::solve(const Eigen::MatrixXd& values, Eigen::MatrixXd& coeffi
     residual -= ln.N * coefficients;
   }
   const Eigen::MatrixXd rhs = ln.N.transpose() * residual;
-  coefficients += ln.normal.solve(rhs);
+  coefficients += ln.sparse.factored() ? ln.sparse.solve(rhs) : Eigen::MatrixXd(ln.dense.solve(rhs));
 }
 
 void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& region) {
   rest_ = P;
+  rest_diagonal_ = bounding_box_diagonal(P);
   constrained_ = region.constrained_vertices();
   handle_of_.clear();
   for (int v : constrained_) handle_of_.push_back(region.handle_of(v));
@@ -117,45 +145,35 @@ void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& r
   solve(data, G);
   handle_coefficients_ = G;
 
-  // b = Ψ(P) G at every point, and the basis itself cached when it fits.
+  // b = Ψ(P) G at every point, and the basis itself cached when it fits (every method here gives each
+  // point the same number of basis values; a point with another count switches the cache off).
   const long n = P.rows();
   BasisRow probe;
   basis(P.row(0).transpose(), probe);
-  const size_t estimate = static_cast<size_t>(n) * probe.index.size() * (sizeof(int) + sizeof(double));
-  const bool cache = estimate <= basis_cache_bytes_;
+  const size_t width = probe.index.size();
+  cache_width_ = static_cast<size_t>(n) * width * (sizeof(int) + sizeof(double)) <= basis_cache_bytes_ ? width : 0;
+  cache_index_.assign(n * cache_width_, 0);
+  cache_value_.assign(n * cache_width_, 0.0);
   point_basis_.setZero(n, cols);
-  const long blocks = std::min<long>(n, 256);
-  std::vector<std::vector<int>> block_index(cache ? blocks : 0), block_count(cache ? blocks : 0);
-  std::vector<std::vector<double>> block_value(cache ? blocks : 0);
-  parallel_for_chunks(
-      blocks,
-      [&](long b0, long b1) {
-        BasisRow row;
-        for (long b = b0; b < b1; ++b)
-          for (long i = n * b / blocks; i < n * (b + 1) / blocks; ++i) {
-            basis(P.row(i).transpose(), row);
-            for (size_t j = 0; j < row.index.size(); ++j) point_basis_.row(i) += row.value[j] * G.row(row.index[j]);
-            if (cache) {
-              block_index[b].insert(block_index[b].end(), row.index.begin(), row.index.end());
-              block_value[b].insert(block_value[b].end(), row.value.begin(), row.value.end());
-              block_count[b].push_back(static_cast<int>(row.index.size()));
-            }
-          }
-      },
-      1);
-  cache_offsets_.clear();
-  cache_index_.clear();
-  cache_value_.clear();
-  if (cache) {
-    cache_offsets_.reserve(n + 1);
-    cache_offsets_.push_back(0);
-    for (long b = 0; b < blocks; ++b) {
-      for (int count : block_count[b]) cache_offsets_.push_back(cache_offsets_.back() + count);
-      cache_index_.insert(cache_index_.end(), block_index[b].begin(), block_index[b].end());
-      cache_value_.insert(cache_value_.end(), block_value[b].begin(), block_value[b].end());
-      std::vector<int>().swap(block_index[b]);
-      std::vector<double>().swap(block_value[b]);
+  std::atomic<bool> uneven{false};
+  parallel_for_chunks(n, [&](long i0, long i1) {
+    BasisRow row;
+    for (long i = i0; i < i1; ++i) {
+      basis(P.row(i).transpose(), row);
+      for (size_t j = 0; j < row.index.size(); ++j) point_basis_.row(i) += row.value[j] * G.row(row.index[j]);
+      if (cache_width_ == 0) continue;
+      if (row.index.size() != cache_width_) {
+        uneven = true;
+        continue;
+      }
+      std::copy(row.index.begin(), row.index.end(), cache_index_.begin() + i * cache_width_);
+      std::copy(row.value.begin(), row.value.end(), cache_value_.begin() + i * cache_width_);
     }
+  }, 1024);
+  if (uneven) {
+    cache_width_ = 0;
+    std::vector<int>().swap(cache_index_);
+    std::vector<double>().swap(cache_value_);
   }
   coefficients_.setZero(m, 3);
   frame_matrices_.assign(static_cast<size_t>(12) * num_handles_, 0.0);
@@ -170,7 +188,9 @@ void SpaceDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
   const long n = rest_.rows();
   const double* b = point_basis_.data();
   const long stride = point_basis_.cols();
+  std::atomic<double> largest{0.0};  // largest squared displacement of any point
   parallel_for_chunks(n, [&](long i0, long i1) {
+    double local = 0;
     for (long i = i0; i < i1; ++i) {
       double d[3] = {0, 0, 0};
       const double* bi = b + i * stride;
@@ -182,6 +202,9 @@ void SpaceDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
       out(i, 0) = rest_(i, 0) + d[0];
       out(i, 1) = rest_(i, 1) + d[1];
       out(i, 2) = rest_(i, 2) + d[2];
+      local = std::max(local, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    }
+    for (double seen = largest.load(); local > seen && !largest.compare_exchange_weak(seen, local);) {
     }
   }, 16384);
   // The map's coefficients: δc = Σ_k G_k (T_k − I)ᵀ (for evaluate()).
@@ -193,6 +216,7 @@ void SpaceDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
       coefficients_(l, r) = s;
     }
   measure_constraints(out, nullptr, &transforms);
+  check_overshoot(std::sqrt(largest.load()));
 }
 
 void SpaceDeformer::do_deform_to(const Positions& targets, Positions& out) {
@@ -204,6 +228,7 @@ void SpaceDeformer::do_deform_to(const Positions& targets, Positions& out) {
   coefficients_ = coefficients;
   apply_coefficients(out);
   measure_constraints(out, &targets, nullptr);
+  check_overshoot((out - rest_).rowwise().norm().maxCoeff());
 }
 
 void SpaceDeformer::deform_controls(const Eigen::MatrixX3d& displacements, Positions& out) {
@@ -224,11 +249,12 @@ void SpaceDeformer::do_reset() { coefficients_.setZero(); }
 
 void SpaceDeformer::apply_coefficients(Positions& out) const {
   const long n = rest_.rows();
-  if (!cache_offsets_.empty()) {
+  if (cache_width_ > 0) {
+    const size_t w = cache_width_;
     parallel_for_chunks(n, [&](long i0, long i1) {
       for (long i = i0; i < i1; ++i) {
         Eigen::RowVector3d d = Eigen::RowVector3d::Zero();
-        for (int j = cache_offsets_[i]; j < cache_offsets_[i + 1]; ++j) d += cache_value_[j] * coefficients_.row(cache_index_[j]);
+        for (size_t j = i * w; j < (i + 1) * w; ++j) d += cache_value_[j] * coefficients_.row(cache_index_[j]);
         out.row(i) = rest_.row(i) + d;
       }
     });
@@ -249,15 +275,30 @@ void SpaceDeformer::do_evaluate(const Positions& points, Positions& out) const {
   }, 1024);
 }
 
+void SpaceDeformer::check_overshoot(double largest_move) {
+  if (!(largest_move > kOvershoot * largest_target_move_) || !(largest_move > 1e-12 * rest_diagonal_)) return;
+  char figures[160];
+  std::snprintf(figures, sizeof(figures), "%.3g times farther than any constrained vertex's target (%.3g vs %.3g of the "
+                "bounding-box diagonal)", largest_move / largest_target_move_, largest_move / rest_diagonal_,
+                largest_target_move_ / rest_diagonal_);
+  frame_report_.warnings.push_back(name() + ": points move up to " + figures + "; " + overshoot_advice());
+}
+
+std::string SpaceDeformer::overshoot_advice() const {
+  return "constraints close together with different motions are amplified; move them apart or use another method";
+}
+
 void SpaceDeformer::measure_constraints(const Positions& out, const Positions* targets,
                                         const std::vector<Mat4>* transforms) {
-  double error = 0;
+  double error = 0, move = 0;
   for (size_t c = 0; c < constrained_.size(); ++c) {
     const Vec3 p = rest_.row(constrained_[c]);
     const Vec3 target = targets ? Vec3(targets->row(c)) : handle_of_[c] < 0 ? p : transform_point((*transforms)[handle_of_[c]], p);
     error = std::max(error, (Vec3(out.row(constrained_[c])) - target).norm());
+    move = std::max(move, (target - p).norm());
   }
   frame_report_.constraint_error = error;
+  largest_target_move_ = move;
 }
 
 }  // namespace msd

@@ -43,8 +43,11 @@ struct LeastNormOptions {
   bool affine_part = true;
   //! Tikhonov weight of the pseudo-inverse, relative to the mean diagonal of NᵀN (N: the #C×m basis
   //! matrix of (9.13)): (NᵀN + ε·mean·I)⁻¹Nᵀ. Directions the constraints barely see stay still instead of
-  //! being blown up; 1e-8 is the least-squares, least-norm solution to about 8 digits elsewhere.
-  double regularization = 1e-8;
+  //! being blown up: the gain from a constraint to a control point is at most 1/(2√(ε·mean)). 1e-6 meets
+  //! the survey benchmark's constraints to about 1e-5 of the bounding-box diagonal; smaller values meet
+  //! them more closely but amplify constraints that conflict within one basis function's support (a
+  //! frame warns when some point then moves more than twice as far as any target).
+  double regularization = 1e-6;
 };
 
 //! Base of the space methods. Subclasses define the basis functions (fit_basis, basis) and, unless the
@@ -94,6 +97,9 @@ class SpaceDeformer : public Deformer {
   //! Applies that map: values #C×k (one row per constrained vertex, in Region::constrained_vertices()
   //! order) to coefficients m×k. Linear in values.
   virtual void solve(const Eigen::MatrixXd& values, Eigen::MatrixXd& coefficients) const;
+  //! What to change when a frame moves some point more than twice as far as any constraint target
+  //! (the linear solve amplified conflicting constraints); appended to that frame's warning.
+  virtual std::string overshoot_advice() const;
   //! Options of the default least-norm solve.
   virtual LeastNormOptions least_norm_options() const { return {}; }
 
@@ -106,9 +112,13 @@ class SpaceDeformer : public Deformer {
  private:
   // out = rest + Σ_l coefficients_(l) ψ_l(rest) at the prepared points (cached basis when present).
   void apply_coefficients(Positions& out) const;
+  // Sets the frame report's constraint_error and the largest target displacement.
   void measure_constraints(const Positions& out, const Positions* targets, const std::vector<Mat4>* transforms);
+  // Warns when largest_move exceeds twice the largest target displacement.
+  void check_overshoot(double largest_move);
 
   Positions rest_;
+  double rest_diagonal_ = 0, largest_target_move_ = 0;
   std::vector<int> constrained_, handle_of_;
   int num_handles_ = 0;
   //! G (m × 4K): coefficients of handle k's affine basis: columns 4k..4k+3 are the solve of the data
@@ -121,8 +131,9 @@ class SpaceDeformer : public Deformer {
   // Least-norm solve: N (#C×m, row-major sparse) and the Cholesky factor of NᵀN + εI; affine fit.
   struct LeastNorm;
   std::shared_ptr<LeastNorm> least_norm_;
-  // Cached basis of the prepared points (CSR), when it fits.
-  std::vector<int> cache_offsets_, cache_index_;
+  // Cached basis of the prepared points (cache_width_ values per point; 0: not cached).
+  size_t cache_width_ = 0;
+  std::vector<int> cache_index_;
   std::vector<double> cache_value_;
   size_t basis_cache_bytes_ = size_t(256) << 20;
 };

@@ -58,6 +58,7 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
       if (settings.decomposition.kind == DecompositionKind::Subdivision && !settings.decomposition.control)
         settings.decomposition.control = edit.control;
       auto deformer = builtin_methods().make(method, settings);
+      if (deformer->traits().domain == DeformerDomain::Surface) require_surface(edit, method);
       auto t0 = Clock::now();
       deformer->prepare(edit.P, edit.F, edit.region);
       r.prepare_ms = ms_since(t0);

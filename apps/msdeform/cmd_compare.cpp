@@ -73,7 +73,8 @@ constexpr Figure916 kFigure916[] = {
     {"built-in bumpy plane", {"lift", "bend120", "twist135"}},
     {"built-in bumpy bar", {"bar-lift", "bar-bend120", "bar-twist135"}},
 };
-constexpr std::array<std::pair<const char*, const char*>, 7> kFigure916Rows = {{
+// Below the seed's rows, the space deformations (9.5, 9.6), which Fig. 9.16 does not show.
+constexpr std::array<std::pair<const char*, const char*>, 11> kFigure916Rows = {{
     {"primo", "PriMo (nonlinear reference)"},
     {"arap", "ARAP (nonlinear)"},
     {"multiscale", ""},  // named after the base method
@@ -81,6 +82,10 @@ constexpr std::array<std::pair<const char*, const char*>, 7> kFigure916Rows = {{
     {"laplacian", "Laplacian editing"},
     {"propagate", "transformation propagation"},
     {"shell", "shell"},
+    {"rbf", "triharmonic RBF (space)"},
+    {"cage-harmonic", "cage, harmonic coordinates (space)"},
+    {"cage-mvc", "cage, mean value coordinates (space)"},
+    {"lattice", "lattice FFD (space)"},
 }};
 
 std::string figure916_html(const std::vector<MethodResult>& results, const std::string& reference,

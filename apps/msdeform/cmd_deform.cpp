@@ -43,6 +43,7 @@ void add_deform_command(CLI::App& app) {
   cmd->callback([=] {
     const EditCase c = edit->load();
     std::unique_ptr<Deformer> deformer = method->make(c);
+    if (deformer->traits().domain == DeformerDomain::Surface) require_surface(c, method->method_name());
     const Positions& rest = c.P;
     auto t0 = Clock::now();
     deformer->prepare(c.P, c.F, c.region);

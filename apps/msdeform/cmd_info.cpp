@@ -12,32 +12,42 @@ namespace {
 void print_info(const std::string& what, const MeshInfo& i, const LoadReport* report) {
   std::printf("%s\n", what.c_str());
   std::printf("  vertices              %d\n", i.vertices);
-  std::printf("  faces                 %d\n", i.faces);
+  std::printf("  faces                 %d%s\n", i.faces, i.faces == 0 ? " (a point cloud)" : "");
   std::printf("  edges                 %d\n", i.edges);
   std::printf("  components            %d\n", i.components);
-  std::printf("  boundary loops        %d\n", i.boundary_loops);
+  std::printf("  boundary edges        %d in %d loop(s)\n", i.boundary_edges, i.boundary_loops);
   std::printf("  euler characteristic  %d\n", i.euler_characteristic);
-  std::printf("  isolated vertices     %d\n", i.isolated_vertices);
-  std::printf("  degenerate faces      %d\n", i.degenerate_faces);
+  std::printf("  unreferenced vertices %d\n", i.unreferenced_vertices);
+  std::printf("  degenerate faces      %d (zero area)\n", i.degenerate_faces);
+  std::printf("  non-manifold edges    %d\n", i.nonmanifold_edges);
   std::printf("  non-manifold vertices %d\n", i.nonmanifold_vertices);
-  std::printf("  non-manifold faces    %d\n", i.nonmanifold_faces);
+  std::printf("  non-orientable parts  %d\n", i.nonorientable_components);
+  std::printf("  flipped faces         %d (wound against their neighbours; turned over when loaded)\n",
+              i.flipped_faces);
   if (report) {
     std::printf("  polygons triangulated %d\n", report->polygons_triangulated);
     std::printf("  repeated-index faces  %d (dropped)\n", report->degenerate_faces_skipped);
-    std::printf("  duplicated vertices   %d\n", report->duplicated_vertices);
+    std::printf("  duplicate faces       %d (dropped)\n", report->duplicate_faces_dropped);
   }
   std::printf("  bounding box          [%.6g %.6g %.6g] .. [%.6g %.6g %.6g]\n", i.bbox_min.x(), i.bbox_min.y(),
               i.bbox_min.z(), i.bbox_max.x(), i.bbox_max.y(), i.bbox_max.z());
   std::printf("  mean edge length      %.6g\n", i.mean_edge_length);
+  if (i.surface_problem.empty())
+    std::printf("  surface               manifold and oriented: for surface and space methods\n");
+  else
+    std::printf("  surface               %s: for space methods only (lattice, cage-mvc, cage-harmonic, rbf)\n",
+                i.surface_problem.c_str());
 }
 }  // namespace
 
 void add_info_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("info", "Print statistics of a mesh file or a built-in scene");
+  auto* cmd = app.add_subcommand(
+      "info", "Print statistics of a mesh file (or soup, or point cloud) or a built-in scene");
   auto mesh_path = std::make_shared<std::string>();
   auto scene = std::make_shared<std::string>();
   auto resolution = std::make_shared<std::string>("10k");
-  auto* mesh_opt = cmd->add_option("mesh", *mesh_path, "Mesh file (.off .obj .ply .stl)");
+  auto* mesh_opt =
+      cmd->add_option("mesh", *mesh_path, "Mesh, soup or point cloud file (.off .obj .ply .stl)");
   cmd->add_option("--scene", *scene, "Built-in scene instead of a file (lift, bend120, twist135, bar-...)")
       ->excludes(mesh_opt);
   cmd->add_option("--resolution", *resolution, "Approximate vertex count of the scene (e.g. 10k, 1M)")->capture_default_str();
@@ -46,8 +56,7 @@ void add_info_command(CLI::App& app) {
       SceneOptions options;
       options.resolution = parse_resolution(*resolution);
       const Scene s = make_scene(*scene, options);
-      const Mesh mesh = make_mesh(s.P, s.F);
-      print_info("scene " + s.name, mesh_info(mesh), nullptr);
+      print_info("scene " + s.name, mesh_info(s.P, s.F), nullptr);
       std::printf("  fixed / free / handle %zu / %zu / %zu vertices\n", s.region.fixed_vertices().size(),
                   s.region.free_vertices().size(), s.region.handle_vertices(0).size());
       std::printf("  subdivision levels    %d (coarse mesh %ld vertices)\n", s.refinement.levels, long(s.coarse_P.rows()));
@@ -55,8 +64,8 @@ void add_info_command(CLI::App& app) {
     }
     if (mesh_path->empty()) throw CLI::RequiredError("mesh or --scene");
     LoadReport report;
-    const Mesh mesh = load_mesh(*mesh_path, &report);
-    print_info(*mesh_path, mesh_info(mesh, &report), &report);
+    const TriangleSoup soup = load_soup(*mesh_path, &report);
+    print_info(*mesh_path, mesh_info(soup.P, soup.F), &report);
   });
 }
 

@@ -1,5 +1,6 @@
 #include "apps/msdeform/deformers.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -127,37 +128,65 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
                       "the implicit linearised similarities (9.11)");
   // One pair of options for both iterative methods: bound to DeformerOptions and copied into the chosen
   // method's settings by method_settings() (their defaults differ per method).
+  scoped_options.clear();
   auto* iterative = cmd.add_option_group("iterative methods", "arap, primo: iterations per frame and stopping test");
-  iterative_options = {};
-  iterative_options.push_back(
-      iterative->add_option("--iterations", iterations,
-                            "iterations per frame at most (default: arap " + std::to_string(ArapOptions{}.max_iterations) +
-                                ", primo " + std::to_string(PrimoOptions{}.max_iterations) + ")")
-          ->check(CLI::PositiveNumber));
-  iterative_options.push_back(
-      iterative->add_option("--tolerance", tolerance,
-                            "stop when one iteration moves no vertex (arap) or no prism corner (primo) by more than "
-                            "this fraction of the bounding-box diagonal; 0: exactly --iterations (default: arap " +
-                                compact(ArapOptions{}.tolerance) + ", primo " + compact(PrimoOptions{}.tolerance) + ")")
-          ->check(CLI::NonNegativeNumber));
+  iterations_option = iterative->add_option("--iterations", iterations,
+                                            "iterations per frame at most (default: arap " +
+                                                std::to_string(ArapOptions{}.max_iterations) + ", primo " +
+                                                std::to_string(PrimoOptions{}.max_iterations) + ")")
+                          ->check(CLI::PositiveNumber);
+  tolerance_option = iterative->add_option("--tolerance", tolerance,
+                                           "stop when one iteration moves no vertex (arap) or no prism corner (primo) "
+                                           "by more than this fraction of the bounding-box diagonal; 0: exactly "
+                                           "--iterations (default: arap " + compact(ArapOptions{}.tolerance) +
+                                               ", primo " + compact(PrimoOptions{}.tolerance) + ")")
+                         ->check(CLI::NonNegativeNumber);
+  scoped_options.push_back({iterations_option, {"arap", "primo"}});
+  scoped_options.push_back({tolerance_option, {"arap", "primo"}});
   auto* arap = cmd.add_option_group("arap", "arap: as-rigid-as-possible (9.8)");
-  arap_options.push_back(arap->add_option("--anderson", settings.arap.anderson,
-                   "Anderson acceleration window (Peng et al. 2018), 0: plain local/global")
-      ->check(CLI::Range(0, 8))
-      ->capture_default_str());
-  arap_options.push_back(arap->add_option("--arap-energy", settings.arap.energy, "rigid cells: spokes or spokes-and-rims")
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, ArapEnergy>{{"spokes", ArapEnergy::Spokes},
-                                            {"spokes-and-rims", ArapEnergy::SpokesAndRims}},
-          CLI::ignore_case))
-      ->default_str("spokes"));
+  scoped_options.push_back({arap->add_option("--anderson", settings.arap.anderson,
+                                             "Anderson acceleration window (Peng et al. 2018), 0: plain local/global")
+                                ->check(CLI::Range(0, 8))
+                                ->capture_default_str(),
+                            {"arap"}});
+  scoped_options.push_back({arap->add_option("--arap-energy", settings.arap.energy, "rigid cells: spokes or spokes-and-rims")
+                                ->transform(CLI::CheckedTransformer(
+                                    std::map<std::string, ArapEnergy>{{"spokes", ArapEnergy::Spokes},
+                                                                      {"spokes-and-rims", ArapEnergy::SpokesAndRims}},
+                                    CLI::ignore_case))
+                                ->default_str("spokes"),
+                            {"arap"}});
   auto* primo = cmd.add_option_group("primo", "primo: coupled rigid prisms, Botsch et al. 2006 (9.8)");
-  primo_options = {};
-  primo_options.push_back(primo->add_option("--prism-thickness", settings.primo.thickness,
-                                            "prism height relative to the mean edge length (> 0); thicker prisms "
-                                            "resist bending more")
-                              ->check(CLI::PositiveNumber)
-                              ->capture_default_str());
+  scoped_options.push_back({primo->add_option("--prism-thickness", settings.primo.thickness,
+                                              "prism height relative to the mean edge length (> 0); thicker prisms "
+                                              "resist bending more")
+                                ->check(CLI::PositiveNumber)
+                                ->capture_default_str(),
+                            {"primo"}});
+  auto* space = cmd.add_option_group("space", "lattice, cage-mvc, cage-harmonic, rbf: space deformations (9.5, 9.6)");
+  const std::vector<std::string> free_form = {"lattice", "cage-mvc", "cage-harmonic"};
+  scoped_options.push_back({space->add_flag("--seed-least-norm", seed_least_norm,
+                                            "lattice, cage: the seed's least-norm solve (9.13) alone; by default the "
+                                            "constraints' best affine map is fitted first and (9.13) corrects the rest, "
+                                            "so affine edits are reproduced everywhere"),
+                            free_form});
+  scoped_options.push_back({space->add_option("--lattice-cells", settings.lattice.cells_longest,
+                                              "lattice: cells along the longest side of the box (the others get cells "
+                                              "of the same size)")
+                                ->check(CLI::Range(1, 64))
+                                ->capture_default_str(),
+                            {"lattice"}});
+  scoped_options.push_back({space->add_option("--lattice-margin", settings.lattice.margin,
+                                              "lattice: space around the input's box on each side, relative to its diagonal")
+                                ->check(CLI::Range(0.0, 10.0))
+                                ->capture_default_str(),
+                            {"lattice"}});
+  scoped_options.push_back({space->add_option("--max-centres", settings.rbf.max_centres,
+                                              "rbf: most centres; more constrained vertices are subsampled by "
+                                              "farthest-point sampling (O(n^3) factorisation)")
+                                ->check(CLI::Range(1, 20000))
+                                ->capture_default_str(),
+                            {"rbf"}});
   auto* ms = cmd.add_option_group("multiscale", "multiscale: decompose, deform the base, add the details back (9.3)");
   decomposition.add_to(*ms);
   std::vector<std::string> single_scale;
@@ -174,18 +203,13 @@ std::string DeformerOptions::method_name() const {
     throw InvalidInput("--base, --detail-scale, --fairing, --remesh-base and --base-method apply to --method "
                        "multiscale; --method " + method + " has no base to decompose");
   const auto uses = [&](const std::string& m) { return method == m || (multiscale && settings.base_method == m); };
-  for (const CLI::Option* o : iterative_options)
-    if (o->count() > 0 && !uses("arap") && !uses("primo"))
-      throw InvalidInput(o->get_name() + " applies to the iterative methods arap and primo (or multiscale with "
-                         "--base-method arap or primo), not --method " + method);
-  for (const CLI::Option* o : arap_options)
-    if (o->count() > 0 && !uses("arap"))
-      throw InvalidInput(o->get_name() + " applies to --method arap (or multiscale with --base-method arap), not --method " +
-                         method);
-  for (const CLI::Option* o : primo_options)
-    if (o->count() > 0 && !uses("primo"))
-      throw InvalidInput(o->get_name() + " applies to --method primo (or multiscale with --base-method primo), not --method " +
-                         method);
+  for (const Scoped& scoped : scoped_options) {
+    if (scoped.option->count() == 0 ||
+        std::any_of(scoped.methods.begin(), scoped.methods.end(), uses))
+      continue;
+    throw InvalidInput(scoped.option->get_name() + " applies to --method " + joined(scoped.methods, ", ") +
+                       " (or multiscale with such a --base-method), not --method " + method);
+  }
   if (method == "multiscale") return "multiscale-" + encoding;
   if (encoding_option && encoding_option->count() > 0)
     throw InvalidInput("--encoding " + encoding + " applies to --method multiscale; --method " + method +
@@ -195,9 +219,9 @@ std::string DeformerOptions::method_name() const {
 
 MethodSettings DeformerOptions::method_settings(const EditCase& edit) const {
   MethodSettings s = settings;
-  if (iterative_options.size() == 2 && iterative_options[0]->count() > 0)
-    s.arap.max_iterations = s.primo.max_iterations = iterations;
-  if (iterative_options.size() == 2 && iterative_options[1]->count() > 0) s.arap.tolerance = s.primo.tolerance = tolerance;
+  if (iterations_option && iterations_option->count() > 0) s.arap.max_iterations = s.primo.max_iterations = iterations;
+  if (tolerance_option && tolerance_option->count() > 0) s.arap.tolerance = s.primo.tolerance = tolerance;
+  s.lattice.least_norm.affine_part = !seed_least_norm;
   s.decomposition = decomposition.resolve(edit);
   return s;
 }

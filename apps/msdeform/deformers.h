@@ -39,11 +39,18 @@ struct DeformerOptions {
   std::string encoding = "normal";
   CLI::Option* encoding_option = nullptr;  // set by add_to(): whether --encoding was given
   CLI::Option* base_method_option = nullptr;
-  std::vector<CLI::Option*> iterative_options;  // --iterations, --tolerance (arap and primo)
-  std::vector<CLI::Option*> arap_options;       // --anderson, --arap-energy
-  std::vector<CLI::Option*> primo_options;      // --prism-thickness
-  int iterations = 0;                           // --iterations, copied into the method's settings when given
-  double tolerance = 0;                         // --tolerance, likewise
+  // Options that configure only some methods: given with another method they are refused by name
+  // (they would be ignored).
+  struct Scoped {
+    CLI::Option* option;
+    std::vector<std::string> methods;
+  };
+  std::vector<Scoped> scoped_options;
+  CLI::Option* iterations_option = nullptr;  // --iterations (arap and primo)
+  CLI::Option* tolerance_option = nullptr;   // --tolerance
+  int iterations = 0;                        // --iterations, copied into the method's settings when given
+  double tolerance = 0;                      // --tolerance, likewise
+  bool seed_least_norm = false;              // --seed-least-norm (lattice, cage-*)
   MethodSettings settings;
   DecompositionArgs decomposition;
   // --method, --encoding and add_settings().

@@ -6,7 +6,8 @@
 namespace msd::cli {
 
 void EditCaseOptions::add_to(CLI::App& cmd) {
-  auto* mesh_opt = cmd.add_option("mesh", mesh, "Mesh file (.off .obj .ply .stl)");
+  auto* mesh_opt = cmd.add_option(
+      "mesh", mesh, "Mesh file (.off .obj .ply .stl); soups and point clouds for space methods");
   auto* sel_opt =
       cmd.add_option("--sel", sel, "Region: .sel (0 fixed, 1 free, 2+k handle k) or .dmat groups (-1 free, k handle k)");
   auto* def_opt = cmd.add_option("--def", def, "Handle transforms: .def, one 4x4 matrix per handle");

@@ -153,3 +153,30 @@ TEST_CASE("real meshes: the nonlinear methods converge, meet their handles and a
 TEST_CASE("real meshes: metrics match the golden values", "[regression][real]") {
   test::check_golden(test::test_data("golden_real.csv"), comparison());
 }
+
+TEST_CASE("real meshes: the space methods deform every real edit and meet its handles as they state",
+          "[regression][real][space]") {
+  ComparisonOptions options;
+  options.methods.clear();
+  for (const auto& entry : builtin_methods().entries())
+    if (entry.make({}, builtin_methods())->traits().domain == DeformerDomain::Space) options.methods.push_back(entry.name);
+  REQUIRE(options.methods.size() >= 2);
+  options.timed_frames = 1;
+  options.self_intersections = false;
+  for (const EditCase& edit : edits()) {
+    const double diag = bounding_box_diagonal(edit.P);
+    for (const MethodResult& r : compare_methods(edit, options)) {
+      INFO(r.scene << " / " << r.method << ": " << r.error << "; handle error " << r.handle_error / diag
+                   << " of the diagonal, rigidity mean " << r.rigidity.mean << "; " << r.warning);
+      REQUIRE(r.ok);
+      CHECK(r.result.rows() == edit.P.rows());
+      CHECK(r.result.allFinite());
+      // RBF interpolates its centres (all constrained vertices up to 2000, farthest-point samples
+      // beyond); the free-form methods meet the constraints in the least-squares sense.
+      CHECK(r.handle_error <= (r.method == "rbf" ? 5e-3 : 5e-2) * diag);
+      if (std::getenv("MSD_PRINT_TABLE"))
+        std::printf("| %s | %s | %.3g | %.4g | %.0f | %.2f |\n", r.scene.c_str(), r.method.c_str(), r.handle_error / diag,
+                    r.rigidity.mean, r.prepare_ms, r.frame_ms);
+    }
+  }
+}

@@ -800,6 +800,13 @@ void CageDeformer::fit_basis(const Positions& P, const Region&) {
     harmonic_ = std::make_unique<HarmonicCoordinates>(cage_P_, cage_F_, options_.harmonic_resolution);
 }
 
+std::string CageDeformer::overshoot_advice() const {
+  return "constraints with different motions pull on the same cage vertices; raise "
+         "least_norm.regularization, "
+         "refine the cage (subdivisions, or a user cage with vertices near the handles) or move the cage "
+         "vertices with deform_controls()";
+}
+
 void CageDeformer::basis(const Vec3& x, BasisRow& row) const {
   const int m = basis_size();
   row.index.resize(m);

@@ -201,6 +201,9 @@ class CageDeformer : public SpaceDeformer {
   void basis(const Vec3& x, BasisRow& row) const override;
   bool exact_constraints() const override { return false; }
   LeastNormOptions least_norm_options() const override { return options_.least_norm; }
+  //! The cage's remedies: a larger regularisation, a finer cage (more vertices near the constraints), or
+  //! editing the cage vertices directly.
+  std::string overshoot_advice() const override;
 
  private:
   std::string name_;

@@ -194,6 +194,7 @@ class CageDeformer : public SpaceDeformer {
   //! The cage in use after prepare (generated or the user's, outward-oriented): #C×3 and #T×3.
   const Positions& cage_positions() const { return cage_P_; }
   const Faces& cage_faces() const { return cage_F_; }
+  Faces control_faces() const override { return cage_F_; }
 
  protected:
   void fit_basis(const Positions& P, const Region& region) override;

@@ -1,5 +1,7 @@
 #include "reconstruction/catalogue.h"
 
+#include <tuple>
+
 #include "core/errors.h"
 
 namespace msd {
@@ -50,6 +52,17 @@ Catalogue make_builtin() {
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<PrimoDeformer>(s.primo); }});
   c.add({"lattice", "9.5.1", "lattice free-form deformation: cubic B-spline lattice, handles by the least-norm solve (9.13)",
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<LatticeDeformer>(s.lattice); }});
+  for (const auto& [name, kind, what] :
+       {std::tuple{"cage-mvc", CageCoordinates::MeanValue, "mean value coordinates (Ju et al. 2005)"},
+        std::tuple{"cage-harmonic", CageCoordinates::Harmonic, "harmonic coordinates (Joshi et al. 2007) on a grid"}})
+    c.add({name, "9.5.2",
+           std::string("cage free-form deformation: ") + what +
+               " of a closed cage (given, or an offset 26-DOP), handles by the least-norm solve (9.13)",
+           [kind = kind](const MethodSettings& s, const Catalogue&) {
+             CageOptions o = s.cage;
+             o.coordinates = kind;
+             return std::make_unique<CageDeformer>(o);
+           }});
   c.add({"rbf", "9.6", "triharmonic radial basis functions r³ with a linear polynomial, precomputed affine basis per handle",
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<RbfDeformer>(s.rbf); }});
   for (const std::string& encoding : encoding_names())

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "deformation/arap.h"
+#include "deformation/cage.h"
 #include "deformation/deformer.h"
 #include "deformation/gradient_editing.h"
 #include "deformation/laplacian_editing.h"
@@ -30,6 +31,7 @@ struct MethodSettings {
   ArapOptions arap;                    //!< arap
   PrimoOptions primo;                  //!< primo
   LatticeOptions lattice;              //!< lattice
+  CageOptions cage;                    //!< cage-mvc and cage-harmonic (the coordinates come from the name)
   RbfOptions rbf;                      //!< rbf
   DecompositionOptions decomposition;  //!< multiscale-*: how S is split into B and details
   EncodingOptions encoding;            //!< multiscale-*: the encodings' options (the kind comes from the name)

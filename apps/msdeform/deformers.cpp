@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/errors.h"
+#include "core/mesh_io.h"
 
 namespace msd::cli {
 
@@ -181,6 +182,29 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
                                 ->check(CLI::Range(0.0, 10.0))
                                 ->capture_default_str(),
                             {"lattice"}});
+  const std::vector<std::string> cages = {"cage-mvc", "cage-harmonic"};
+  scoped_options.push_back({space->add_option("--cage", cage_file,
+                                              "cage-*: a closed, consistently oriented triangle mesh enclosing the "
+                                              "input (.off .obj .ply .stl); default: an offset 26-DOP of the input")
+                                ->check(CLI::ExistingFile),
+                            cages});
+  scoped_options.push_back({space->add_option("--cage-margin", settings.cage.margin,
+                                              "cage-*, generated cage: its offset from the input, relative to the "
+                                              "bounding-box diagonal")
+                                ->check(CLI::Range(1e-6, 10.0))
+                                ->capture_default_str(),
+                            cages});
+  scoped_options.push_back({space->add_option("--cage-subdivisions", settings.cage.subdivisions,
+                                              "cage-*, generated cage: midpoint subdivisions of the 26-DOP (each "
+                                              "quadruples its triangles: more control vertices)")
+                                ->check(CLI::Range(0, 4))
+                                ->capture_default_str(),
+                            cages});
+  scoped_options.push_back({space->add_option("--harmonic-resolution", settings.cage.harmonic_resolution,
+                                              "cage-harmonic: grid cells along the cage's longest side")
+                                ->check(CLI::Range(4, 1024))
+                                ->capture_default_str(),
+                            {"cage-harmonic"}});
   scoped_options.push_back({space->add_option("--max-centres", settings.rbf.max_centres,
                                               "rbf: most centres; more constrained vertices are subsampled by "
                                               "farthest-point sampling (O(n^3) factorisation)")
@@ -221,7 +245,12 @@ MethodSettings DeformerOptions::method_settings(const EditCase& edit) const {
   MethodSettings s = settings;
   if (iterations_option && iterations_option->count() > 0) s.arap.max_iterations = s.primo.max_iterations = iterations;
   if (tolerance_option && tolerance_option->count() > 0) s.arap.tolerance = s.primo.tolerance = tolerance;
-  s.lattice.least_norm.affine_part = !seed_least_norm;
+  s.lattice.least_norm.affine_part = s.cage.least_norm.affine_part = !seed_least_norm;
+  if (!cage_file.empty()) {
+    const Mesh cage = load_mesh(cage_file);
+    s.cage.cage_P = positions(cage);
+    s.cage.cage_F = faces(cage);
+  }
   s.decomposition = decomposition.resolve(edit);
   return s;
 }

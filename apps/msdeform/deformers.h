@@ -51,6 +51,7 @@ struct DeformerOptions {
   int iterations = 0;                        // --iterations, copied into the method's settings when given
   double tolerance = 0;                      // --tolerance, likewise
   bool seed_least_norm = false;              // --seed-least-norm (lattice, cage-*)
+  std::string cage_file;                     // --cage (cage-*)
   MethodSettings settings;
   DecompositionArgs decomposition;
   // --method, --encoding and add_settings().

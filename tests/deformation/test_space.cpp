@@ -154,7 +154,9 @@ TEST_CASE("lattice: control-point editing, linear precision and clamping outside
   CHECK(mapped.allFinite());
   CHECK((mapped.row(0) - mapped.row(1)).norm() == Approx(0.001).margin(1e-9));
   CHECK_THROWS_AS(lattice.deform_controls(Eigen::MatrixX3d::Zero(3, 3), out), UsageError);
-  CHECK_THROWS_AS(LatticeDeformer(LatticeOptions{Eigen::Vector3i(2, 0, 2)}).prepare(s.P, s.F, s.region), InvalidInput);
+  LatticeOptions partial;
+  partial.cells = Eigen::Vector3i(2, 0, 2);  // some cell counts given, not all
+  CHECK_THROWS_AS(LatticeDeformer(partial).prepare(s.P, s.F, s.region), InvalidInput);
 }
 
 TEST_CASE("rbf: interpolates every constraint and subsamples beyond max_centres", "[space][rbf]") {
@@ -284,7 +286,8 @@ TEST_CASE("space methods: a soup of 360 inconsistently oriented boxes with three
     REQUIRE(out.allFinite());
     // Every free box moved smoothly: its eight corners follow one affine map up to the second-order
     // term of a smooth map (below 15 % of the box side of 0.08 for this edit, whose constraints 0.1 apart
-    // move by up to 0.15 relative to each other: a torn or crumpled box would be off by its whole size).
+    // move by up to 0.15 relative to each other, 30 % for the cages' least-squares compromise: a torn or
+    // crumpled box would be off by its whole size).
     double worst = 0;
     for (int b = 0; b < nv / 8; ++b) {
       if (codes[8 * b] != Region::kFree) continue;
@@ -297,7 +300,8 @@ TEST_CASE("space methods: a soup of 360 inconsistently oriented boxes with three
       const Eigen::Matrix<double, 4, 3> A = X.colPivHouseholderQr().solve(Y);
       worst = std::max(worst, (X * A - Y).rowwise().norm().maxCoeff());
     }
-    CHECK(worst <= 0.15 * 0.08);
+    const bool cage = d->name().rfind("cage", 0) == 0;
+    CHECK(worst <= (cage ? 0.3 : 0.15) * 0.08);
     // Components that touch stay touching: the map is one function of space, so corners at one
     // position (boxes grown to their +x neighbour) land at one position.
     double gap = 0;
@@ -311,11 +315,12 @@ TEST_CASE("space methods: a soup of 360 inconsistently oriented boxes with three
     CHECK(touching > 100);
     CHECK(gap <= 1e-12);
     // The hood and the wheel houses keep their shape: moved by their translations, exactly (RBF) or to
-    // the stated least-squares residual (a lattice of 8 cells cannot separate the wheel houses from
-    // their neighbours: about 2 % of the diagonal).
+    // the stated least-squares residual: a lattice of 8 cells cannot separate the wheel houses from
+    // their neighbours (about 1.7 % of the diagonal), nor can the generated convex cage, whose vertices
+    // all lie outside the body (about 2.4 %; a cage drawn around the parts would).
     const double error = test::constraint_error(s.P, out, region, T);
     CHECK(d->frame_report().constraint_error == Approx(error).margin(1e-12));
-    CHECK(error <= (d->name() == "rbf" ? 1e-9 : 2e-2) * diag);
+    CHECK(error <= (d->name() == "rbf" ? 1e-9 : cage ? 3e-2 : 2e-2) * diag);
   }
   // Surface methods refuse the soup with a named error instead of crashing.
   for (const std::string method : {"shell", "arap", "propagate"}) {

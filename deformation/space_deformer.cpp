@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <numeric>
 
 #include "core/checks.h"
 #include "core/errors.h"
@@ -56,24 +57,47 @@ void SpaceDeformer::prepare_solve(const Positions& P, const std::vector<int>& co
   // N: the basis at the constrained vertices.
   std::vector<BasisRow> rows(nc);
   parallel_for_chunks(nc, [&](long c0, long c1) {
-    for (long c = c0; c < c1; ++c) basis(P.row(constrained[c]).transpose(), rows[c]);
+    for (long c = c0; c < c1; ++c) prepared_basis(P, constrained[c], rows[c]);
   }, 256);
+  // Filled as compressed rows directly (indices sorted within each row).
   ln->N.resize(nc, m);
-  Eigen::VectorXi sizes(nc);
-  for (int c = 0; c < nc; ++c) sizes[c] = static_cast<int>(rows[c].index.size());
-  ln->N.reserve(sizes);
-  for (int c = 0; c < nc; ++c)
-    for (size_t j = 0; j < rows[c].index.size(); ++j) ln->N.insert(c, rows[c].index[j]) = rows[c].value[j];
-  ln->N.makeCompressed();
+  long nonzeros = 0;
+  for (const BasisRow& row : rows) nonzeros += static_cast<long>(row.index.size());
+  ln->N.resizeNonZeros(nonzeros);
+  int* outer = ln->N.outerIndexPtr();
+  outer[0] = 0;
+  for (int c = 0; c < nc; ++c) {
+    BasisRow& row = rows[c];
+    if (!std::is_sorted(row.index.begin(), row.index.end())) {
+      std::vector<int> order(row.index.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::sort(order.begin(), order.end(), [&](int a, int b) { return row.index[a] < row.index[b]; });
+      BasisRow sorted;
+      for (int j : order) sorted.add(row.index[j], row.value[j]);
+      row = std::move(sorted);
+    }
+    std::copy(row.index.begin(), row.index.end(), ln->N.innerIndexPtr() + outer[c]);
+    std::copy(row.value.begin(), row.value.end(), ln->N.valuePtr() + outer[c]);
+    outer[c + 1] = outer[c] + static_cast<int>(row.index.size());
+  }
   std::vector<BasisRow>().swap(rows);
   // NᵀN + ε·mean(diag)·I: accumulated densely for up to kDenseLimit basis functions (a lattice of 8
   // cells or a cage), by a sparse product beyond.
   if (m <= kDenseLimit) {
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m, m);
-    for (int c = 0; c < nc; ++c)
-      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator a(ln->N, c); a; ++a)
-        for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator b(ln->N, c); b; ++b)
-          if (b.col() <= a.col()) normal(a.col(), b.col()) += a.value() * b.value();
+    if (4 * ln->N.nonZeros() > static_cast<Eigen::Index>(nc) * m) {
+      // Dense rows (a cage's coordinates): rank updates by blocks of rows (blocked, vectorised SYRK).
+      Eigen::MatrixXd block;
+      for (int c0 = 0; c0 < nc; c0 += 2048) {
+        block = ln->N.middleRows(c0, std::min(2048, nc - c0));
+        normal.selfadjointView<Eigen::Lower>().rankUpdate(block.transpose());
+      }
+    } else {
+      for (int c = 0; c < nc; ++c)
+        for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator a(ln->N, c); a; ++a)
+          for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator b(ln->N, c); b; ++b)
+            if (b.col() <= a.col()) normal(a.col(), b.col()) += a.value() * b.value();
+    }
     double mean = normal.diagonal().sum() / m;
     normal.diagonal().array() += options.regularization * (mean > 0 ? mean : 1.0);
     ln->dense.compute(normal.selfadjointView<Eigen::Lower>());
@@ -133,6 +157,42 @@ void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& r
   least_norm_.reset();
   fit_basis(P, region);
   const int m = basis_size();
+
+  // The basis at every point, cached when it fits (every method here gives each point the same number
+  // of basis values; a point with another count switches the cache off): then the solve and the
+  // affine basis below read it instead of evaluating it again.
+  const long n = P.rows();
+  BasisRow probe;
+  basis(P.row(0).transpose(), probe);
+  const size_t width = probe.index.size();
+  // Dense rows (ψ_0 .. ψ_{m−1} in order: a cage, RBF) are cached without their indices.
+  cache_dense_ = static_cast<int>(width) == m;
+  for (size_t j = 0; j < width && cache_dense_; ++j) cache_dense_ = probe.index[j] == static_cast<int>(j);
+  cache_width_ = 0;
+  cache_index_.resize(0);
+  cache_value_.resize(0);
+  if (static_cast<size_t>(n) * width * (sizeof(double) + (cache_dense_ ? 0 : sizeof(int))) <= basis_cache_bytes_) {
+    if (!cache_dense_) cache_index_.resize(n * width);  // uninitialised: filled in parallel below
+    cache_value_.resize(n * width);
+    std::atomic<bool> uneven{false};
+    parallel_for_chunks(n, [&](long i0, long i1) {
+      BasisRow row;
+      for (long i = i0; i < i1; ++i) {
+        basis(P.row(i).transpose(), row);
+        if (row.index.size() != width || (cache_dense_ && row.index.back() != m - 1)) {
+          uneven = true;
+          continue;
+        }
+        if (!cache_dense_) std::copy(row.index.begin(), row.index.end(), cache_index_.data() + i * width);
+        std::copy(row.value.begin(), row.value.end(), cache_value_.data() + i * width);
+      }
+    }, 1024);
+    cache_width_ = uneven ? 0 : width;
+    if (uneven) {
+      cache_index_.resize(0);
+      cache_value_.resize(0);
+    }
+  }
   prepare_solve(P, constrained_);
 
   // Handle k's affine basis: the solve of the data (x, y, z, 1) on its vertices, zero elsewhere.
@@ -145,38 +205,28 @@ void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& r
   solve(data, G);
   handle_coefficients_ = G;
 
-  // b = Ψ(P) G at every point, and the basis itself cached when it fits (every method here gives each
-  // point the same number of basis values; a point with another count switches the cache off).
-  const long n = P.rows();
-  BasisRow probe;
-  basis(P.row(0).transpose(), probe);
-  const size_t width = probe.index.size();
-  cache_width_ = static_cast<size_t>(n) * width * (sizeof(int) + sizeof(double)) <= basis_cache_bytes_ ? width : 0;
-  cache_index_.assign(n * cache_width_, 0);
-  cache_value_.assign(n * cache_width_, 0.0);
+  // b = Ψ(P) G at every point.
   point_basis_.setZero(n, cols);
-  std::atomic<bool> uneven{false};
   parallel_for_chunks(n, [&](long i0, long i1) {
     BasisRow row;
     for (long i = i0; i < i1; ++i) {
-      basis(P.row(i).transpose(), row);
+      prepared_basis(P, i, row);
       for (size_t j = 0; j < row.index.size(); ++j) point_basis_.row(i) += row.value[j] * G.row(row.index[j]);
-      if (cache_width_ == 0) continue;
-      if (row.index.size() != cache_width_) {
-        uneven = true;
-        continue;
-      }
-      std::copy(row.index.begin(), row.index.end(), cache_index_.begin() + i * cache_width_);
-      std::copy(row.value.begin(), row.value.end(), cache_value_.begin() + i * cache_width_);
     }
   }, 1024);
-  if (uneven) {
-    cache_width_ = 0;
-    std::vector<int>().swap(cache_index_);
-    std::vector<double>().swap(cache_value_);
-  }
   coefficients_.setZero(m, 3);
   frame_matrices_.assign(static_cast<size_t>(12) * num_handles_, 0.0);
+}
+
+void SpaceDeformer::prepared_basis(const Positions& P, long v, BasisRow& row) const {
+  if (cache_width_ == 0) return basis(P.row(v).transpose(), row);
+  if (cache_dense_) {
+    row.index.resize(cache_width_);
+    for (size_t j = 0; j < cache_width_; ++j) row.index[j] = static_cast<int>(j);
+  } else {
+    row.index.assign(cache_index_.data() + v * cache_width_, cache_index_.data() + (v + 1) * cache_width_);
+  }
+  row.value.assign(cache_value_.data() + v * cache_width_, cache_value_.data() + (v + 1) * cache_width_);
 }
 
 void SpaceDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
@@ -254,7 +304,10 @@ void SpaceDeformer::apply_coefficients(Positions& out) const {
     parallel_for_chunks(n, [&](long i0, long i1) {
       for (long i = i0; i < i1; ++i) {
         Eigen::RowVector3d d = Eigen::RowVector3d::Zero();
-        for (size_t j = i * w; j < (i + 1) * w; ++j) d += cache_value_[j] * coefficients_.row(cache_index_[j]);
+        if (cache_dense_)
+          for (size_t j = 0; j < w; ++j) d += cache_value_[i * w + j] * coefficients_.row(j);
+        else
+          for (size_t j = i * w; j < (i + 1) * w; ++j) d += cache_value_[j] * coefficients_.row(cache_index_[j]);
         out.row(i) = rest_.row(i) + d;
       }
     });

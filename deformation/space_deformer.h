@@ -53,7 +53,7 @@ struct LeastNormOptions {
 //! Base of the space methods. Subclasses define the basis functions (fit_basis, basis) and, unless the
 //! least-norm solve of (9.13) is what they want, the constraint solve (prepare_solve, solve).
 //! Frames (deform) are O(#V·#handles), parallel and allocation-free; deform_to() and deform_controls()
-//! evaluate the basis at every point (O(#V·basis size), cached when it fits in `basis_cache_bytes`).
+//! evaluate the basis at every point (O(#V·basis size), cached when it fits: set_basis_cache_bytes()).
 class SpaceDeformer : public Deformer {
  public:
   //! Space domain, linear, per-vertex targets; exact_constraints as the subclass says (exact_constraints()).
@@ -80,7 +80,9 @@ class SpaceDeformer : public Deformer {
   void deform_controls(const Eigen::MatrixX3d& displacements, Positions& out);
 
   //! The memory allowed for caching the basis of the prepared points (deform_to, deform_controls); above
-  //! it those frames re-evaluate the basis. Default 256 MB.
+  //! it those frames re-evaluate the basis (and prepare() evaluates it twice at the constrained
+  //! vertices). Default 1 GB: a lattice (64 values per point, 12 bytes each) up to 1.4M points, a cage of
+  //! 186 vertices (8 bytes per value) up to 720k points.
   void set_basis_cache_bytes(size_t bytes) { basis_cache_bytes_ = bytes; }
 
  protected:
@@ -102,6 +104,9 @@ class SpaceDeformer : public Deformer {
   //! What to change when a frame moves some point more than twice as far as any constraint target
   //! (the linear solve amplified conflicting constraints); appended to that frame's warning.
   virtual std::string overshoot_advice() const;
+  //! ψ(p_v) of vertex v of the points being prepared (P, as given to prepare_solve), from the cache when
+  //! the basis of every point fits in memory, else evaluated.
+  void prepared_basis(const Positions& P, long v, BasisRow& row) const;
   //! Options of the default least-norm solve.
   virtual LeastNormOptions least_norm_options() const { return {}; }
 
@@ -135,9 +140,10 @@ class SpaceDeformer : public Deformer {
   std::shared_ptr<LeastNorm> least_norm_;
   // Cached basis of the prepared points (cache_width_ values per point; 0: not cached).
   size_t cache_width_ = 0;
-  std::vector<int> cache_index_;
-  std::vector<double> cache_value_;
-  size_t basis_cache_bytes_ = size_t(256) << 20;
+  bool cache_dense_ = false;  // rows are ψ_0 .. ψ_{m−1}: indices not stored
+  Eigen::VectorXi cache_index_;  // Eigen vectors: sized without being filled, then written in parallel
+  Eigen::VectorXd cache_value_;
+  size_t basis_cache_bytes_ = size_t(1) << 30;
 };
 
 }  // namespace msd

@@ -10,12 +10,13 @@
 #include <string>
 #include <tuple>
 
-#include "core/checks.h"
 #include "core/atomic_file.h"
+#include "core/checks.h"
 #include "core/errors.h"
+#include "core/laplacian.h"
 #include "core/mesh.h"
 #include "core/parallel.h"
-#include "core/laplacian.h"
+#include "core/surface_check.h"
 
 namespace msd {
 namespace {
@@ -351,7 +352,12 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
   const Positions Pc = P.rowwise() - centre.transpose();
   double radius = Pc.rowwise().norm().maxCoeff();
   if (!(radius > 0)) radius = 1;
-  const Positions N = vertex_normals(P, F);
+  // Vertex normals of the faces wound consistently where the surface allows (check_surface turns a copy
+  // over): a soup's faces may come in either winding, and a normal summed over opposite windings would
+  // cancel and mottle the shading. Shading is two-sided, so which of the two windings wins is immaterial.
+  Faces oriented = F;
+  check_surface(P, oriented);
+  const Positions N = vertex_normals(P, oriented);
   const EmbreeScene scene(Pc, F);
 
   Legend legend;

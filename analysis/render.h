@@ -69,10 +69,11 @@ struct RenderOptions {
 
 //! Ray-traces (P #V×3, F #F×3) into an image of options.width × options.height pixels: a pinhole camera
 //! on view_direction, placed by options.framing so the whole mesh is visible. Shading is two-sided Lambert
-//! (front and back faces look alike) from a head light and a key light (upper left, optional shadows) plus
-//! ambient and a little specular, with vertex normals interpolated at the hit. Rows are traced in parallel.
-//! With a scalar and legend = true (and an image of at least 100×60) the right part of the image holds the
-//! colour bar.
+//! (front and back faces look alike, so a soup's faces need no consistent winding: vertex normals are
+//! summed over faces oriented alike where the surface is orientable, see check_surface) from a head light
+//! and a key light (upper left, optional shadows) plus ambient and a little specular, with vertex normals
+//! interpolated at the hit. Rows are traced in parallel. With a scalar and legend = true (and an image of
+//! at least 100×60) the right part of the image holds the colour bar.
 //! \throw InvalidInput for an empty F, an index out of range, a non-finite coordinate or scalar value, a
 //! scalar of the wrong size, or an option out of range (sizes 1..16384, samples 1..16, fov in (0, 170),
 //! a zero or non-finite view direction, a negative or non-finite sphere); Error if Embree fails.

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <set>
 
@@ -160,6 +161,28 @@ TEST_CASE("render: bad input is named", "[analysis][render]") {
   CHECK(covered_fraction(render(s.P, s.F, o), o) > 0.2);
   CHECK_THROWS_AS(render(s.P, Faces(0, 3), o), InvalidInput);
   CHECK_THROWS_AS(write_png(Image(), "unused.png"), InvalidInput);
+}
+
+TEST_CASE("render: a soup's faces look alike whichever way they are wound", "[analysis][render]") {
+  Positions P;
+  Faces F;
+  test::icosphere(3, P, F);
+  Faces mixed = F;
+  for (Eigen::Index f = 0; f < F.rows(); f += 3) std::swap(mixed(f, 1), mixed(f, 2));  // a third flipped
+  RenderOptions o;
+  o.width = 160;
+  o.height = 120;
+  const Image consistent = render(P, F, o), soup = render(P, mixed, o);
+  long differ = 0;
+  int largest = 0;
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x) {
+      const int d = (at(consistent, x, y) - at(soup, x, y)).cwiseAbs().maxCoeff();
+      largest = std::max(largest, d);
+      differ += d > 3;
+    }
+  INFO("pixels differing by more than 3: " << differ << ", largest difference " << largest);
+  CHECK(differ == 0);
 }
 
 TEST_CASE("robust scalar range and colour map", "[analysis][render]") {

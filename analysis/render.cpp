@@ -10,18 +10,23 @@
 #include <string>
 #include <tuple>
 
-#include "core/checks.h"
 #include "core/atomic_file.h"
+#include "core/checks.h"
 #include "core/errors.h"
+#include "core/laplacian.h"
 #include "core/mesh.h"
 #include "core/parallel.h"
-#include "core/laplacian.h"
+#include "core/surface_check.h"
 
 namespace msd {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kGamma = 2.2;
+// Point radius per median nearest-neighbour distance (default_point_radius): measured on CGAL's b9 scan,
+// where half the spacing left the gaps between scan lines showing and 0.85 closes them (a square grid is
+// covered from 0.71 on) while every point still shows as a bead.
+constexpr double kPointRadiusPerSpacing = 0.85;
 const Vec3 kTextColour(0.12, 0.13, 0.16);
 
 std::uint8_t to_byte(double c) {
@@ -51,27 +56,47 @@ std::string format_number(double x) {
   return buffer;
 }
 
-// Owns an Embree device and a committed scene of one triangle geometry.
+// The closest hit of a ray: the primitive (a face, or a point of a cloud), the barycentrics of corners 1
+// and 2 of a face, and Embree's geometric normal (unnormalised; outwards for a sphere).
+struct Hit {
+  int primitive = -1;
+  float u = 0, v = 0;
+  Vec3 normal = Vec3::Zero();
+};
+
+// Owns an Embree device and a committed scene of one geometry: the triangles F, or, for an empty F, one
+// sphere of point_radius per row of P.
 class EmbreeScene {
  public:
   // P: #V by 3 in the render frame (already centred), F: #F by 3 with valid indices.
-  EmbreeScene(const Positions& P, const Faces& F) {
+  EmbreeScene(const Positions& P, const Faces& F, double point_radius) {
     device_ = rtcNewDevice(nullptr);
     if (!device_)
       throw Error("render: Embree could not create a device (error " +
                   std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) + ")");
     scene_ = rtcNewScene(device_);
-    RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    const bool points = F.rows() == 0;
+    RTCGeometry geometry =
+        rtcNewGeometry(device_, points ? RTC_GEOMETRY_TYPE_SPHERE_POINT : RTC_GEOMETRY_TYPE_TRIANGLE);
+    if (!geometry)
+      fail(points ? "could not create the point geometry" : "could not create the triangle geometry");
+    // Spheres take (x, y, z, radius) per point; triangles a vertex buffer and an index buffer.
+    const int stride = points ? 4 : 3;
     auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), P.rows()));
-    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), F.rows()));
-    if (!vertices || !indices) {
+        geometry, RTC_BUFFER_TYPE_VERTEX, 0, points ? RTC_FORMAT_FLOAT4 : RTC_FORMAT_FLOAT3,
+        stride * sizeof(float), P.rows()));
+    unsigned* indices = nullptr;
+    if (!points)
+      indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+          geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), F.rows()));
+    if (!vertices || (!points && !indices)) {
       rtcReleaseGeometry(geometry);
       fail("could not allocate buffers");
     }
-    for (Eigen::Index v = 0; v < P.rows(); ++v)
-      for (int k = 0; k < 3; ++k) vertices[3 * v + k] = static_cast<float>(P(v, k));
+    for (Eigen::Index v = 0; v < P.rows(); ++v) {
+      for (int k = 0; k < 3; ++k) vertices[stride * v + k] = static_cast<float>(P(v, k));
+      if (points) vertices[stride * v + 3] = static_cast<float>(point_radius);
+    }
     for (Eigen::Index f = 0; f < F.rows(); ++f)
       for (int k = 0; k < 3; ++k) indices[3 * f + k] = static_cast<unsigned>(F(f, k));
     rtcCommitGeometry(geometry);
@@ -87,8 +112,8 @@ class EmbreeScene {
   EmbreeScene(const EmbreeScene&) = delete;
   EmbreeScene& operator=(const EmbreeScene&) = delete;
 
-  // Closest hit along org + t dir, t > 0: face index (or -1), barycentrics of corners 1 and 2, and t.
-  int intersect(const Vec3& org, const Vec3& dir, float& u, float& v) const {
+  // Closest hit along org + t dir, t > 0 (primitive -1 for none).
+  Hit intersect(const Vec3& org, const Vec3& dir) const {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRayHit rh;
@@ -96,10 +121,13 @@ class EmbreeScene {
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(scene_, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return -1;
-    u = rh.hit.u;
-    v = rh.hit.v;
-    return static_cast<int>(rh.hit.primID);
+    Hit hit;
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+    hit.primitive = static_cast<int>(rh.hit.primID);
+    hit.u = rh.hit.u;
+    hit.v = rh.hit.v;
+    hit.normal = Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+    return hit;
   }
 
   bool occluded(const Vec3& org, const Vec3& dir) const {
@@ -144,9 +172,10 @@ struct Camera {
   }
 };
 
-// Camera for the centred positions Pc (bounding-box centre at the origin, farthest vertex at radius).
-Camera frame_camera(const Positions& Pc, double radius, const Vec3& centre, const RenderOptions& o,
-                    int view_width) {
+// Camera for the centred positions Pc (bounding-box centre at the origin, everything drawn within radius),
+// each drawn as a sphere of radius pad (0 for the vertices of faces).
+Camera frame_camera(const Positions& Pc, double radius, double pad, const Vec3& centre,
+                    const RenderOptions& o, int view_width) {
   Camera cam;
   const Vec3 to_eye = o.view_direction.normalized();
   Vec3 up = o.up.norm() > 0 ? o.up.normalized() : Vec3(0, 0, 1);
@@ -176,14 +205,16 @@ Camera frame_camera(const Positions& Pc, double radius, const Vec3& centre, cons
   // smallest such D is explicit; the aim is refined a few times to centre the extreme vertices.
   constexpr double fit = 0.95;
   const Eigen::VectorXd x = Pc * cam.right, y = Pc * cam.up, z = Pc * cam.forward;
-  const double near = -z.minCoeff() + 1e-3 * radius;  // every vertex in front of the eye
+  const double near = -z.minCoeff() + pad + 1e-3 * radius;  // every vertex (and sphere) in front of the eye
   double sx = 0, sy = 0, D = 0;
+  // A sphere's outline is taken as its centre's offset plus pad at the depth of its nearest point, a
+  // little generous for spheres off the axis, which the 5% margin absorbs.
   auto distance = [&] {
     double d = near;
     for (Eigen::Index i = 0; i < x.size(); ++i)
-      d = std::max(
-          d,
-          std::max(std::abs(x[i] - sx) / (fit * cam.tan_h), std::abs(y[i] - sy) / (fit * cam.tan_v)) - z[i]);
+      d = std::max(d, std::max((std::abs(x[i] - sx) + pad) / (fit * cam.tan_h),
+                               (std::abs(y[i] - sy) + pad) / (fit * cam.tan_v)) -
+                          (z[i] - pad));
     return d;
   };
   // Shift s that balances the extreme projections: (a − s)/da + (b − s)/db = 0 for the vertices with the
@@ -229,6 +260,9 @@ void check_options(const RenderOptions& o, const Positions& P) {
   if (!o.up.allFinite()) fail("up must be finite");
   if (!o.sphere_center.allFinite() || !std::isfinite(o.sphere_radius) || o.sphere_radius < 0)
     fail("sphere_center must be finite and sphere_radius finite and non-negative");
+  if (!std::isfinite(o.point_radius) || o.point_radius < 0)
+    fail("point_radius = " + std::to_string(o.point_radius) +
+         " must be finite and non-negative (0: automatic)");
   if (o.vertex_scalar) {
     const Eigen::VectorXd& s = *o.vertex_scalar;
     if (s.size() != P.rows())
@@ -341,18 +375,28 @@ std::pair<double, double> robust_scalar_range(const Eigen::VectorXd& values) {
 
 Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
   check_mesh_arrays(P, F, "render");
-  if (F.rows() == 0) throw InvalidInput("render: the mesh has no faces");
+  if (P.rows() == 0) throw InvalidInput("render: nothing to draw (no vertices)");
   check_options(o, P);
+  const bool points = F.rows() == 0;
+  const double point_radius = !points ? 0.0 : o.point_radius > 0 ? o.point_radius : default_point_radius(P);
 
   // Everything is traced relative to the bounding-box centre, which keeps Embree's floats accurate for
   // meshes far from the origin.
   const Vec3 lo = P.colwise().minCoeff().transpose(), hi = P.colwise().maxCoeff().transpose();
   const Vec3 centre = 0.5 * (lo + hi);
   const Positions Pc = P.rowwise() - centre.transpose();
-  double radius = Pc.rowwise().norm().maxCoeff();
+  double radius = Pc.rowwise().norm().maxCoeff() + point_radius;
   if (!(radius > 0)) radius = 1;
-  const Positions N = vertex_normals(P, F);
-  const EmbreeScene scene(Pc, F);
+  // Vertex normals of the faces wound consistently where the surface allows (check_surface turns a copy
+  // over): a soup's faces may come in either winding, and a normal summed over opposite windings would
+  // cancel and mottle the shading. Shading is two-sided, so which of the two windings wins is immaterial.
+  Positions N;
+  if (!points) {
+    Faces oriented = F;
+    check_surface(P, oriented);
+    N = vertex_normals(P, oriented);
+  }
+  const EmbreeScene scene(Pc, F, point_radius);
 
   Legend legend;
   if (o.vertex_scalar) {
@@ -365,7 +409,7 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
   }
   const int view_width = o.width - (legend.shown ? legend.panel_width : 0);
 
-  const Camera cam = frame_camera(Pc, radius, centre, o, view_width);
+  const Camera cam = frame_camera(Pc, radius, point_radius, centre, o, view_width);
 
   // Head light from the eye, key light from the upper left (in camera terms, so every view is lit alike).
   const Vec3 key = (-0.6 * cam.right + 0.7 * cam.up - 0.4 * cam.forward).normalized();
@@ -373,8 +417,28 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
   const double shadow_offset = 1e-4 * radius;
   const Vec3 base = to_linear(o.base_color);
   const Eigen::VectorXd* scalar = o.vertex_scalar;
+  auto albedo_of = [&](double s) { return to_linear(viridis((s - legend.lo) / (legend.hi - legend.lo))); };
 
-  auto shade = [&](int f, double u, double v, const Vec3& dir) -> Vec3 {
+  // Lambert from the head and key lights at point (shading normal n, geometric normal ng, both unit and
+  // turned towards the viewer), the key light's shadow ray leaving just above the surface.
+  auto light = [&](const Vec3& point, const Vec3& n, const Vec3& ng, const Vec3& view,
+                   const Vec3& albedo) -> Vec3 {
+    double lit = ambient + head_strength * std::abs(n.dot(view));
+    const double n_dot_key = n.dot(key);
+    if (n_dot_key > 0 && ng.dot(key) > 0) {
+      const bool visible = !o.shadows || !scene.occluded(point + shadow_offset * ng, key);
+      if (visible) {
+        lit += key_strength * n_dot_key;
+        const double spec = std::pow(std::max(0.0, n.dot((key + view).normalized())), 40.0);
+        return lit * albedo + Vec3::Constant(specular_strength * spec);
+      }
+    }
+    return lit * albedo;
+  };
+
+  auto shade_face = [&](const Hit& hit, const Vec3& dir) -> Vec3 {
+    const int f = hit.primitive;
+    const double u = hit.u, v = hit.v;
     const int a = F(f, 0), b = F(f, 1), c = F(f, 2);
     const double w0 = 1 - u - v;
     const Vec3 pa = Pc.row(a).transpose(), pb = Pc.row(b).transpose(), pc = Pc.row(c).transpose();
@@ -385,27 +449,19 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
     Vec3 n = (w0 * N.row(a) + u * N.row(b) + v * N.row(c)).transpose();
     n = n.norm() > 1e-12 ? n.normalized() : ng;
     if (n.dot(ng) < 0) n = -n;
+    const Vec3 albedo = scalar ? albedo_of(w0 * (*scalar)[a] + u * (*scalar)[b] + v * (*scalar)[c]) : base;
+    return light(w0 * pa + u * pb + v * pc, n, ng, view, albedo);
+  };
 
-    Vec3 albedo = base;
-    if (scalar) {
-      const double s = w0 * (*scalar)[a] + u * (*scalar)[b] + v * (*scalar)[c];
-      albedo = to_linear(viridis((s - legend.lo) / (legend.hi - legend.lo)));
-    }
-    double lit = ambient + head_strength * std::abs(n.dot(view));
-    const double n_dot_key = n.dot(key);
-    if (n_dot_key > 0 && ng.dot(key) > 0) {
-      bool visible = true;
-      if (o.shadows) {
-        const Vec3 point = w0 * pa + u * pb + v * pc + shadow_offset * ng;
-        visible = !scene.occluded(point, key);
-      }
-      if (visible) {
-        lit += key_strength * n_dot_key;
-        const double spec = std::pow(std::max(0.0, n.dot((key + view).normalized())), 40.0);
-        return lit * albedo + Vec3::Constant(specular_strength * spec);
-      }
-    }
-    return lit * albedo;
+  // A point's sphere: its normal is the geometric one (a sphere has no interpolated normal to smooth).
+  auto shade_point = [&](const Hit& hit, const Vec3& dir) -> Vec3 {
+    const int i = hit.primitive;
+    const Vec3 view = -dir;
+    Vec3 n = hit.normal.norm() > 0 ? hit.normal.normalized() : view;
+    if (n.dot(view) < 0) n = -n;
+    const Vec3 centre_i = Pc.row(i).transpose();
+    const Vec3 albedo = scalar ? albedo_of((*scalar)[i]) : base;
+    return light(centre_i + point_radius * n, n, n, view, albedo);
   };
 
   Image image(o.width, o.height);
@@ -428,12 +484,11 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
                 const double px = x + (sx + 0.5) / s, py = y + (sy + 0.5) / s;
                 const double ndc_x = 2.0 * px / view_width - 1.0, ndc_y = 1.0 - 2.0 * py / o.height;
                 const Vec3 dir = cam.ray(ndc_x, ndc_y);
-                float u = 0, v = 0;
-                const int f = scene.intersect(cam.eye, dir, u, v);
-                if (f < 0) {
+                const Hit hit = scene.intersect(cam.eye, dir);
+                if (hit.primitive < 0) {
                   sum += bg;
                 } else {
-                  sum += shade(f, u, v, dir);
+                  sum += points ? shade_point(hit, dir) : shade_face(hit, dir);
                   ++hits;
                 }
               }
@@ -444,6 +499,35 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
       4);
   if (legend.shown) legend.draw(image);
   return image;
+}
+
+double default_point_radius(const Positions& P) {
+  check_finite(P, "default_point_radius", "the points");
+  if (P.rows() == 0) throw InvalidInput("default_point_radius: no points");
+  // Nearest distinct neighbour of up to kSamples points spread evenly through the ids, each against all
+  // points: O(kSamples #V), exact for small clouds, and a sample's median is all a radius needs.
+  constexpr Eigen::Index kSamples = 256;
+  const Eigen::Index n = P.rows(), samples = std::min(n, kSamples);
+  std::vector<double> best(static_cast<size_t>(samples), std::numeric_limits<double>::infinity());
+  parallel_for_chunks(
+      samples,
+      [&](long begin, long end) {
+        for (long k = begin; k < end; ++k) {
+          const Vec3 p = P.row(k * n / samples).transpose();
+          double& b = best[static_cast<size_t>(k)];
+          for (Eigen::Index j = 0; j < n; ++j) {
+            const double d2 = (P.row(j).transpose() - p).squaredNorm();
+            if (d2 > 0 && d2 < b) b = d2;  // coincident copies of a point are not its neighbours
+          }
+        }
+      },
+      16);
+  std::vector<double> nearest;
+  for (double d2 : best)
+    if (std::isfinite(d2)) nearest.push_back(std::sqrt(d2));
+  if (nearest.empty()) return 1;  // a single point, or all points coincide: no spacing to measure
+  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
+  return kPointRadiusPerSpacing * nearest[nearest.size() / 2];
 }
 
 void render_png(const Positions& P, const Faces& F, const std::string& path, const RenderOptions& options) {

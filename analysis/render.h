@@ -1,5 +1,6 @@
 #pragma once
-//! \file Off-screen pictures of meshes: an Embree 3 ray tracer (no window, no GPU) that writes PNG, a
+//! \file Off-screen pictures of meshes, triangle soups and point clouds: an Embree 3 ray tracer (no window,
+//! no GPU) that writes PNG, a
 //! perceptual colour map for per-vertex scalars with a legend, a built-in 5×7 bitmap font, and contact
 //! sheets. Colours are RGB triples in [0, 1] (sRGB); images are 8-bit RGB.
 
@@ -54,7 +55,11 @@ struct RenderOptions {
   Vec3 sphere_center = Vec3::Zero();
   double sphere_radius = 0;
   int samples_per_axis = 2;  //!< supersampling: samples_per_axis² rays per pixel on a regular grid
-  //! #V values to colour the surface with (viridis, interpolated at the hit point); null for base_color.
+  //! Point clouds (no faces): the radius of the sphere drawn at each point, in scene units; 0 chooses
+  //! default_point_radius(P). Pass one radius to several renders (e.g. the rest cloud's) to draw them alike.
+  double point_radius = 0;
+  //! #V values to colour the surface with (viridis, interpolated at the hit point; one colour per sphere
+  //! of a point cloud); null for base_color.
   const Eigen::VectorXd* vertex_scalar = nullptr;
   std::string scalar_label;  //!< title of the legend
   //! Colour-map range; when equal, robust_scalar_range(*vertex_scalar) is used.
@@ -68,15 +73,27 @@ struct RenderOptions {
 };
 
 //! Ray-traces (P #V×3, F #F×3) into an image of options.width × options.height pixels: a pinhole camera
-//! on view_direction, placed by options.framing so the whole mesh is visible. Shading is two-sided Lambert
-//! (front and back faces look alike) from a head light and a key light (upper left, optional shadows) plus
-//! ambient and a little specular, with vertex normals interpolated at the hit. Rows are traced in parallel.
-//! With a scalar and legend = true (and an image of at least 100×60) the right part of the image holds the
-//! colour bar.
-//! \throw InvalidInput for an empty F, an index out of range, a non-finite coordinate or scalar value, a
+//! on view_direction, placed by options.framing so the whole mesh is visible. Any triangle list is drawn
+//! (soups, non-manifold and multi-component meshes); an empty F draws P as a point cloud, one sphere of
+//! options.point_radius per vertex. Shading is two-sided Lambert (front and back faces look alike, so a
+//! soup's faces need no consistent winding: vertex normals are summed over faces oriented alike where the
+//! surface is orientable, see check_surface) from a head light and a key light (upper left, optional
+//! shadows) plus ambient and a little specular, with vertex normals interpolated at the hit (a sphere's
+//! own normal for points). Rows are traced in parallel. With a scalar and legend = true (and an image of
+//! at least 100×60) the right part of the image holds the colour bar.
+//! \throw InvalidInput for no vertices, an index out of range, a non-finite coordinate or scalar value, a
 //! scalar of the wrong size, or an option out of range (sizes 1..16384, samples 1..16, fov in (0, 170),
-//! a zero or non-finite view direction, a negative or non-finite sphere); Error if Embree fails.
+//! a zero or non-finite view direction, a negative or non-finite sphere or point radius); Error if Embree
+//! fails.
 Image render(const Positions& P, const Faces& F, const RenderOptions& options = {});
+
+//! The sphere radius render() gives the points of a cloud (P #V×3) by default: 0.85 × the median distance
+//! from a point to its nearest other point, over up to 256 points spread evenly through the ids, each
+//! compared with all (O(256·#V), parallel). Neighbouring spheres then overlap, so a scan reads as a
+//! surface (a square grid is covered without gaps) while single points stay visible. Coincident points are
+//! not neighbours; a single point, or points that all coincide, get radius 1. \throw InvalidInput for no
+//! points or a non-finite coordinate.
+double default_point_radius(const Positions& P);
 
 //! render() written to path as PNG (atomically). \throw as render() and write_png().
 void render_png(const Positions& P, const Faces& F, const std::string& path,

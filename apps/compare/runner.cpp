@@ -38,15 +38,33 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
     throw InvalidInput("the reference method '" + options.reference + "' is not among the compared methods");
   const Positions& rest = edit.P;
   const Faces& F = edit.F;
-  // The rest-shape side of the metrics, once for every method. A case they cannot measure (e.g. a region
-  // without free vertices) fails each method with the metrics' message, as measuring it would.
-  std::optional<EditMetrics> metrics;
-  std::exception_ptr metrics_error;
-  try {
-    metrics.emplace(rest, F, edit.region);
-  } catch (const std::exception&) {
-    metrics_error = std::current_exception();
+  // The rest-shape side of the metrics, once for every method. A metric this input cannot give is left
+  // out, with the reason each result then carries; it never fails a method.
+  std::vector<std::string> unmeasured;  // reasons that hold for every result of this edit
+  std::optional<RigidityMetric> rigidity;
+  std::optional<DetailDistortionMetric> distortion;
+  std::optional<VolumeChangeMetric> volume;
+  const bool has_faces = F.rows() > 0;
+  // Runs one metric's step; if it throws, the metric is not measured and `reasons` says why.
+  auto attempt = [](std::vector<std::string>& reasons, const char* metric, auto&& step) {
+    try {
+      step();
+    } catch (const std::exception& e) {
+      reasons.push_back(std::string(metric) + " not measured: " + e.what());
+    }
+  };
+  if (!has_faces) {
+    unmeasured.push_back(
+        "point cloud: no faces, so rigidity, detail distortion, self-intersections and volume change are not "
+        "measured");
+  } else {
+    attempt(unmeasured, "rigidity", [&] { rigidity.emplace(rest, F); });
+    attempt(unmeasured, "detail distortion", [&] { distortion.emplace(rest, F, edit.region); });
+    attempt(unmeasured, "volume change", [&] { volume.emplace(rest, F); });
   }
+  // CGAL's count needs a manifold, consistently oriented surface, which depends on the faces alone: once
+  // it has refused them, it is not asked again.
+  std::string self_intersections_refused;
   std::vector<MethodResult> results;
   for (const auto& method : options.methods) {
     MethodResult r;
@@ -79,18 +97,37 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
       r.iterations = report.iterations;
       for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
         for (const std::string& w : *list) r.warning += (r.warning.empty() ? "" : "; ") + w;
+      if (!r.result.allFinite()) throw Error(method + " returned a non-finite position");
       r.handle_error = handle_error(rest, r.result, edit.region, edit.transforms);
-      if (metrics_error) std::rethrow_exception(metrics_error);
-      r.rigidity = metrics->rigidity(r.result).stats;
-      DetailDistortion d = metrics->detail_distortion(r.result);
-      r.distortion = d.stats;
-      r.distortion_per_vertex = std::move(d.per_vertex);
-      if (options.self_intersections) r.self_intersections = count_self_intersections(r.result, F);
-      r.volume_change = metrics->volume_change(r.result);
       r.ok = true;
     } catch (const std::exception& e) {
       r.ok = false;
       r.error = e.what();
+    }
+    if (r.ok) {
+      std::vector<std::string> lacking = unmeasured;
+      if (rigidity) attempt(lacking, "rigidity", [&] { r.rigidity = rigidity->measure(r.result).stats; });
+      if (distortion)
+        attempt(lacking, "detail distortion", [&] {
+          DetailDistortion d = distortion->measure(r.result);
+          r.distortion = d.stats;
+          r.distortion_per_vertex = std::move(d.per_vertex);
+        });
+      if (options.self_intersections && has_faces) {
+        if (self_intersections_refused.empty()) {
+          try {
+            r.self_intersections = count_self_intersections(r.result, F);
+          } catch (const InvalidInput& e) {
+            self_intersections_refused = e.what();  // the faces, as the result is finite: so for every result
+          } catch (const std::exception& e) {
+            lacking.push_back(std::string("self-intersections not measured: ") + e.what());
+          }
+        }
+        if (!self_intersections_refused.empty())
+          lacking.push_back("self-intersections not measured: " + self_intersections_refused);
+      }
+      if (volume) attempt(lacking, "volume change", [&] { r.volume_change = volume->measure(r.result); });
+      for (const std::string& reason : lacking) r.not_measured += (r.not_measured.empty() ? "" : "; ") + reason;
     }
     if (options.progress)
       options.progress(edit.name + " / " + method + ": " +
@@ -127,6 +164,8 @@ std::vector<Column> columns() {
   using Value = std::function<std::string(const MethodResult&)>;
   auto measured = [](Value f) -> Value { return [f](const MethodResult& r) { return r.ok ? f(r) : std::string(); }; };
   auto count = [](int n) { return n < 0 ? std::string("n/a") : std::to_string(n); };
+  // A summary of no values was not measured (MethodResult::not_measured says why).
+  auto stat = [=](const Stats& s, double x) { return s.count > 0 ? g(x) : std::string("n/a"); };
   return {
       {"scene", [](const MethodResult& r) { return r.scene; }},
       {"method", [](const MethodResult& r) { return r.method; }},
@@ -135,12 +174,12 @@ std::vector<Column> columns() {
       {"prepare_ms", measured([=](const MethodResult& r) { return g(r.prepare_ms); })},
       {"frame_ms", measured([=](const MethodResult& r) { return g(r.frame_ms); })},
       {"handle_error", measured([=](const MethodResult& r) { return g(r.handle_error); })},
-      {"rigidity_mean", measured([=](const MethodResult& r) { return g(r.rigidity.mean); })},
-      {"rigidity_p95", measured([=](const MethodResult& r) { return g(r.rigidity.p95); })},
-      {"rigidity_max", measured([=](const MethodResult& r) { return g(r.rigidity.max); })},
-      {"distortion_mean", measured([=](const MethodResult& r) { return g(r.distortion.mean); })},
-      {"distortion_p95", measured([=](const MethodResult& r) { return g(r.distortion.p95); })},
-      {"distortion_max", measured([=](const MethodResult& r) { return g(r.distortion.max); })},
+      {"rigidity_mean", measured([=](const MethodResult& r) { return stat(r.rigidity, r.rigidity.mean); })},
+      {"rigidity_p95", measured([=](const MethodResult& r) { return stat(r.rigidity, r.rigidity.p95); })},
+      {"rigidity_max", measured([=](const MethodResult& r) { return stat(r.rigidity, r.rigidity.max); })},
+      {"distortion_mean", measured([=](const MethodResult& r) { return stat(r.distortion, r.distortion.mean); })},
+      {"distortion_p95", measured([=](const MethodResult& r) { return stat(r.distortion, r.distortion.p95); })},
+      {"distortion_max", measured([=](const MethodResult& r) { return stat(r.distortion, r.distortion.max); })},
       {"self_intersections", measured([=](const MethodResult& r) { return count(r.self_intersections); })},
       // Multi-scale methods count the triangles that folded over the deformed base; others do not (n/a).
       {"folded_faces", measured([=](const MethodResult& r) { return count(r.folded_faces); })},
@@ -148,11 +187,22 @@ std::vector<Column> columns() {
       // Distance to the reference method's result (relative to its diagonal), when a reference ran.
       {"reference_max", measured([=](const MethodResult& r) { return r.reference ? g(r.reference->max) : std::string("n/a"); })},
       {"reference_mean", measured([=](const MethodResult& r) { return r.reference ? g(r.reference->mean) : std::string("n/a"); })},
+      {"not_measured", [](const MethodResult& r) { return r.not_measured; }},  // why cells read n/a
       {"message", [](const MethodResult& r) { return r.ok ? r.warning : r.error; }},  // error, or warning
   };
 }
 
 }  // namespace
+
+std::vector<std::string> measurement_notes(const std::vector<MethodResult>& results) {
+  std::vector<std::string> notes;
+  for (const MethodResult& r : results) {
+    if (r.not_measured.empty()) continue;
+    std::string note = r.scene + ": " + r.not_measured;
+    if (std::find(notes.begin(), notes.end(), note) == notes.end()) notes.push_back(std::move(note));
+  }
+  return notes;
+}
 
 std::vector<std::vector<std::string>> metrics_table(const std::vector<MethodResult>& results) {
   const auto cols = columns();
@@ -185,6 +235,7 @@ std::string metrics_csv(const std::vector<MethodResult>& results) {
 std::string metrics_markdown(const std::vector<MethodResult>& results) {
   const auto table = metrics_table(results);
   std::string out;
+  for (const std::string& note : measurement_notes(results)) out += note + "\n\n";
   for (size_t r = 0; r < table.size(); ++r) {
     out += "|";
     for (std::string v : table[r]) {

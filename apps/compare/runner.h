@@ -24,18 +24,24 @@ struct MethodResult {
   //! methods their one frame from rest.
   double prepare_ms = 0, frame_ms = 0;
   double handle_error = 0;              //!< max |p' − T p| over handle and fixed vertices
-  Stats rigidity;                       //!< one-ring rotation residual (rigidity_error)
-  Stats distortion;                     //!< detail distortion, relative to the largest detail height
+  //! One-ring rotation residual (rigidity_error); count 0 when not measured (not_measured says why).
+  Stats rigidity;
+  //! Detail distortion, relative to the largest detail height; count 0 when not measured.
+  Stats distortion;
   int self_intersections = -1;          //!< intersecting face pairs (-1: not measured)
   int folded_faces = -1;                //!< the method's own frame check (FrameReport; -1: not measured)
   int iterations = 0;                   //!< iterative methods: iterations of the last frame (FrameReport)
   std::string warning;                  //!< what the method warned about (prepare and frame warnings)
+  //! Which metrics this result lacks and why, e.g. "point cloud: no faces, so rigidity, detail distortion,
+  //! self-intersections and volume change are not measured"; empty when all were measured (a volume change
+  //! of an open mesh, or self-intersections switched off in the options, need no reason).
+  std::string not_measured;
   std::optional<double> volume_change;  //!< relative, for closed meshes
   //! Vertex-to-vertex distance to the reference method's result on the same edit, relative to its
   //! bounding-box diagonal (ComparisonOptions::reference; empty when there is none).
   std::optional<ReferenceDistance> reference;
   Positions result;                     //!< #V by 3 deformed positions
-  Eigen::VectorXd distortion_per_vertex;  //!< #V |Δh| in scene units
+  Eigen::VectorXd distortion_per_vertex;  //!< #V |Δh| in scene units (empty when not measured)
 };
 
 struct ComparisonOptions {
@@ -53,9 +59,14 @@ struct ComparisonOptions {
 //! Checks that every method name is known, before any work. \throw InvalidInput naming the first unknown.
 void check_method_names(const std::vector<std::string>& methods);
 
-//! Runs each method on the case and measures the result. The metrics' rest-shape data (EditMetrics) are
-//! prepared once per call, not once per method. A method that throws, or a case the metrics cannot
-//! measure, is recorded with ok = false and its message; the others still run.
+//! Runs each method on the case and measures the result. The metrics' rest-shape data (RigidityMetric,
+//! DetailDistortionMetric, VolumeChangeMetric) are prepared once per call, not once per method. A method
+//! that throws, or returns a non-finite position, is recorded with ok = false and its message; the others
+//! still run. A metric that the input cannot give is left unmeasured and the result says why
+//! (MethodResult::not_measured), but it never fails the method: a point cloud (no faces) has no rigidity,
+//! detail distortion, self-intersections or volume; a soup's faces give rigidity (one-ring edges) and, where
+//! its free vertices can be faired, detail distortion, while CGAL counts self-intersections only on a
+//! manifold, consistently oriented surface.
 std::vector<MethodResult> compare_methods(const EditCase& edit, const ComparisonOptions& options);
 
 //! Of the successful multi-scale results ("multiscale-<encoding>") on `scene`, the one closest to the
@@ -63,12 +74,17 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
 //! "shell + multi-scale" row of the seed's Fig. 9.16. nullptr when there is none.
 const MethodResult* best_multiscale(const std::vector<MethodResult>& results, const std::string& scene);
 
+//! Why some metrics of the results are n/a, one line per scene and reason, "<scene>: <not_measured>", in
+//! the order of the results; empty when every metric was measured. The notes above the metrics tables.
+std::vector<std::string> measurement_notes(const std::vector<MethodResult>& results);
+
 //! The results as a table of text cells: the header (column names) first, then one row per result.
-//! Failed runs have empty measured cells (a 0 would read as perfect); unmeasured ones read "n/a".
+//! Failed runs have empty measured cells (a 0 would read as perfect); unmeasured ones read "n/a", and the
+//! column not_measured says why.
 std::vector<std::vector<std::string>> metrics_table(const std::vector<MethodResult>& results);
 //! The results as a CSV table (one row per result, a header line first).
 std::string metrics_csv(const std::vector<MethodResult>& results);
-//! The results as a Markdown table.
+//! The results as a Markdown table, preceded by the measurement_notes (a paragraph each) if there are any.
 std::string metrics_markdown(const std::vector<MethodResult>& results);
 
 }  // namespace msd

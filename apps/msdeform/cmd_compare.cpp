@@ -53,8 +53,13 @@ struct SceneOutput {
 std::string caption(const MethodResult& r) {
   if (!r.ok) return "failed";
   char text[200];
-  std::snprintf(text, sizeof text, "rigidity %.3g, distortion %.3g, pairs ", r.rigidity.mean, r.distortion.mean);
-  std::string out = text + (r.self_intersections < 0 ? std::string("n/a") : std::to_string(r.self_intersections));
+  // A summary of no values was not measured (the notes above the metrics say why).
+  auto mean = [&](const Stats& s) {
+    std::snprintf(text, sizeof text, "%.3g", s.mean);
+    return s.count > 0 ? std::string(text) : std::string("n/a");
+  };
+  std::string out = "rigidity " + mean(r.rigidity) + ", distortion " + mean(r.distortion) + ", pairs " +
+                    (r.self_intersections < 0 ? std::string("n/a") : std::to_string(r.self_intersections));
   if (r.reference) {
     std::snprintf(text, sizeof text, ", to reference %.3g (mean %.3g)", r.reference->max, r.reference->mean);
     out += text;
@@ -146,7 +151,8 @@ std::string index_html(const std::vector<MethodResult>& results, const std::vect
        ".grid td{text-align:center;vertical-align:top;font-size:12px}</style></head><body>\n"
        "<h1>msdeform: methods and detail encodings compared</h1>\n"
        "<p>Colour: change of the detail heights (normal displacements over a faired base, seed 9.3) against "
-       "the input; one camera per scene. Files: <a href=\"metrics.csv\">metrics.csv</a>, "
+       "the input (plain where it is not measured: see the notes above the metrics); one camera per scene; a point "
+       "cloud is drawn as one sphere per point. Files: <a href=\"metrics.csv\">metrics.csv</a>, "
        "<a href=\"metrics.md\">metrics.md</a>, <a href=\"contact_sheet.png\">contact_sheet.png</a>, meshes/.</p>\n";
   h << figure916_html(results, reference, base_method);
   h << "<h2>All pictures</h2>\n<table class=\"grid\"><tr><th></th>";
@@ -160,7 +166,15 @@ std::string index_html(const std::vector<MethodResult>& results, const std::vect
       h << "<td><img src=\"" << html_escape(s.images[r]) << "\" alt=\"\"><br>" << html_escape(s.captions[r]) << "</td>";
     h << "</tr>\n";
   }
-  h << "</table>\n<h2>Metrics</h2>\n<table>";
+  h << "</table>\n<h2>Metrics</h2>\n";
+  // Why cells read n/a (a point cloud has no faces, a soup no manifold surface for CGAL), above the table.
+  const std::vector<std::string> notes = measurement_notes(results);
+  if (!notes.empty()) {
+    h << "<p>Cells read n/a where the input does not allow the metric:</p>\n<ul>\n";
+    for (const std::string& note : notes) h << "<li>" << html_escape(note) << "</li>\n";
+    h << "</ul>\n";
+  }
+  h << "<table>";
   const auto table = metrics_table(results);
   for (size_t r = 0; r < table.size(); ++r) {
     h << "<tr>";
@@ -267,30 +281,36 @@ void add_compare_command(CLI::App& app) {
       view.height = 480;
       view.framing = Framing::BoundingSphere;
       framing_sphere(rest, results, view.sphere_center, view.sphere_radius);
+      const bool point_cloud = F.rows() == 0;
+      if (point_cloud) view.point_radius = default_point_radius(rest);  // the rest's spacing in every picture
+      // Colour by detail change where it was measured (#V values; empty when not measured).
+      auto has_distortion = [&](const MethodResult& r) { return r.ok && r.distortion_per_vertex.size() == rest.rows(); };
       double scalar_max = 0;
       for (const auto& r : results)
-        if (r.ok) scalar_max = std::max(scalar_max, robust_scalar_range(r.distortion_per_vertex).second);
+        if (has_distortion(r)) scalar_max = std::max(scalar_max, robust_scalar_range(r.distortion_per_vertex).second);
       SceneOutput so{c.name, {}, {}};
       std::vector<Image> column;
       const std::string input_png = "images/" + c.name + "--input.png";
       Image input = render(rest, F, view);
       write_png(input, (out / input_png).string());
       so.images.push_back(input_png);
-      so.captions.push_back(std::to_string(rest.rows()) + " vertices");
+      so.captions.push_back(std::to_string(rest.rows()) + (point_cloud ? " points (no faces)" : " vertices"));
       column.push_back(std::move(input));
       for (const auto& r : results) {
         const std::string png = "images/" + c.name + "--" + r.method + ".png";
         if (r.ok) {
           RenderOptions ro = view;
-          ro.vertex_scalar = &r.distortion_per_vertex;
-          ro.scalar_label = "detail change";
-          ro.scalar_min = 0;
-          ro.scalar_max = scalar_max > 0 ? scalar_max : 1e-12;
+          SaveOptions save;
+          if (has_distortion(r)) {
+            ro.vertex_scalar = &r.distortion_per_vertex;
+            ro.scalar_label = "detail change";
+            ro.scalar_min = 0;
+            ro.scalar_max = scalar_max > 0 ? scalar_max : 1e-12;
+            save.vertex_scalar = &r.distortion_per_vertex;
+            save.scalar_name = "detail_change";
+          }
           Image img = render(r.result, F, ro);
           write_png(img, (out / png).string());
-          SaveOptions save;
-          save.vertex_scalar = &r.distortion_per_vertex;
-          save.scalar_name = "detail_change";
           save_mesh(r.result, F, (out / "meshes" / (c.name + "--" + r.method + ".ply")).string(), save);
           column.push_back(std::move(img));
         } else {

@@ -1,7 +1,11 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <set>
+#include <utility>
+#include <vector>
 
 #include "analysis/render.h"
 #include "core/atomic_file.h"
@@ -14,6 +18,8 @@ using namespace msd;
 using Catch::Matchers::Contains;
 
 namespace {
+
+constexpr double kPi = 3.14159265358979323846;
 
 Scene plane(int resolution = 5000) {
   SceneOptions o;
@@ -158,8 +164,209 @@ TEST_CASE("render: bad input is named", "[analysis][render]") {
   CHECK_THROWS_AS(render(s.P, s.F, o), InvalidInput);
   o.view_direction = Vec3(0, 0, 1);  // parallel to up: another up axis is chosen
   CHECK(covered_fraction(render(s.P, s.F, o), o) > 0.2);
-  CHECK_THROWS_AS(render(s.P, Faces(0, 3), o), InvalidInput);
+  CHECK_THROWS_AS(render(Positions(0, 3), Faces(0, 3), o), InvalidInput);  // nothing to draw
+  o.point_radius = -1;
+  CHECK_THROWS_WITH(render(s.P, Faces(0, 3), o), Contains("point_radius"));
+  o.point_radius = 0;
   CHECK_THROWS_AS(write_png(Image(), "unused.png"), InvalidInput);
+}
+
+namespace {
+
+// A 3×3 grid of points at x, y ∈ {−1, 0, 1}, z = 0, looked at straight down in a square image.
+Positions point_grid() {
+  Positions P(9, 3);
+  for (int i = 0; i < 9; ++i) P.row(i) << i % 3 - 1.0, i / 3 - 1.0, 0.0;
+  return P;
+}
+
+RenderOptions top_view(int size) {
+  RenderOptions o;
+  o.width = o.height = size;
+  o.view_direction = Vec3(0, 0, 1);
+  o.up = Vec3(0, 1, 0);
+  o.samples_per_axis = 1;
+  o.legend = false;
+  return o;
+}
+
+bool is_background(const Image& image, const RenderOptions& o, int x, int y) {
+  return (at(image, x, y) - background_at(o, y)).cwiseAbs().maxCoeff() <= 1;
+}
+
+// Runs [first, last] of non-background pixels along row y (along_row) or column y of the image.
+std::vector<std::pair<int, int>> covered_runs(const Image& image, const RenderOptions& o, int line,
+                                              bool along_row) {
+  std::vector<std::pair<int, int>> runs;
+  const int n = along_row ? image.width : image.height;
+  for (int i = 0; i < n; ++i) {
+    const bool covered = along_row ? !is_background(image, o, i, line) : !is_background(image, o, line, i);
+    if (!covered) continue;
+    if (!runs.empty() && runs.back().second == i - 1)
+      runs.back().second = i;
+    else
+      runs.emplace_back(i, i);
+  }
+  return runs;
+}
+
+// The picture of the 3×3 grid: centres of its columns (pixels) and rows, and the discs' mean diameter.
+struct GridPicture {
+  std::vector<double> columns, rows;
+  double diameter = 0;
+};
+
+// Finds the grid in the image through its middle row and column, which cross the middle point; checks
+// that each holds exactly three discs.
+GridPicture find_grid(const Image& image, const RenderOptions& o) {
+  GridPicture g;
+  for (bool along_row : {true, false}) {
+    const auto runs = covered_runs(image, o, (along_row ? image.height : image.width) / 2, along_row);
+    REQUIRE(runs.size() == 3);
+    for (const auto& [first, last] : runs) {
+      (along_row ? g.columns : g.rows).push_back(0.5 * (first + last + 1));
+      g.diameter += (last - first + 1) / 6.0;
+    }
+  }
+  return g;
+}
+
+}  // namespace
+
+TEST_CASE("render: a point cloud is drawn as spheres where the points are, background between them",
+          "[analysis][render][points]") {
+  const Positions P = point_grid();
+  RenderOptions o = top_view(201);
+  o.point_radius = 0.1;
+  const Image image = render(P, Faces(0, 3), o);
+  const GridPicture g = find_grid(image, o);
+  // The grid is centred and evenly spaced (all points at one depth: the projection is linear), and the
+  // discs are 2 r / spacing = 0.2 of the spacing wide.
+  const double spacing = 0.5 * (g.columns[2] - g.columns[0]);
+  CHECK(g.columns[1] == Approx(o.width / 2.0).margin(1));
+  CHECK(g.rows[1] == Approx(o.height / 2.0).margin(1));
+  CHECK(g.columns[1] - g.columns[0] == Approx(spacing).margin(1));
+  CHECK(g.rows[2] - g.rows[0] == Approx(2 * spacing).margin(1));
+  CHECK(g.diameter == Approx(0.2 * spacing).margin(1.5));
+  CHECK(spacing > 50);  // the grid fills the frame (tight framing)
+  // Every point is drawn at its place and lit; between neighbours, and off the grid, only background.
+  for (double x : g.columns)
+    for (double y : g.rows) {
+      const int px = static_cast<int>(x), py = static_cast<int>(y);
+      INFO("point at pixel (" << px << ", " << py << ")");
+      CHECK_FALSE(is_background(image, o, px, py));
+      CHECK(at(image, px, py).sum() > 3 * 60);
+    }
+  // The image's edges, and midway between neighbours.
+  std::vector<int> xs = {0, o.width - 1}, ys = {0, o.height - 1};
+  for (int k = 0; k < 2; ++k) {
+    xs.push_back(static_cast<int>(0.5 * (g.columns[k] + g.columns[k + 1])));
+    ys.push_back(static_cast<int>(0.5 * (g.rows[k] + g.rows[k + 1])));
+  }
+  for (int x : xs)
+    for (int y : ys) {
+      INFO("pixel (" << x << ", " << y << ")");
+      CHECK(is_background(image, o, x, y));
+    }
+  for (int x : xs)
+    for (double y : g.rows) CHECK(is_background(image, o, x, static_cast<int>(y)));
+  for (double x : g.columns)
+    for (int y : ys) CHECK(is_background(image, o, static_cast<int>(x), y));
+  // Nine discs and nothing else: their area over the image's.
+  const double disc = kPi * std::pow(0.5 * g.diameter, 2);
+  CHECK(covered_fraction(image, o) == Approx(9 * disc / (o.width * o.height)).epsilon(0.15));
+
+  // The radius is the option's: twice as large draws discs twice as wide.
+  o.point_radius = 0.2;
+  const GridPicture twice = find_grid(render(P, Faces(0, 3), o), o);
+  CHECK(twice.diameter / (0.5 * (twice.columns[2] - twice.columns[0])) == Approx(0.4).margin(0.03));
+}
+
+TEST_CASE("render: a per-point scalar colours each point's sphere with the colour map",
+          "[analysis][render][points]") {
+  const Positions P = point_grid();
+  Eigen::VectorXd value(9);
+  for (int i = 0; i < 9; ++i) value[i] = 0.5 * (P(i, 0) + 1);  // by column: 0, 0.5, 1
+  RenderOptions o = top_view(201);
+  o.point_radius = 0.1;
+  o.vertex_scalar = &value;
+  o.scalar_min = 0;
+  o.scalar_max = 1;
+  o.shadows = false;
+  const Image image = render(P, Faces(0, 3), o);
+  const GridPicture g = find_grid(image, o);
+  // At a sphere's centre the normal faces the eye: lit from the front, each point keeps the hue of its value.
+  for (double y : g.rows) {
+    const int py = static_cast<int>(y);
+    const Eigen::Vector3i low = at(image, static_cast<int>(g.columns[0]), py),
+                          mid = at(image, static_cast<int>(g.columns[1]), py),
+                          high = at(image, static_cast<int>(g.columns[2]), py);
+    INFO("row " << py << ": " << low.transpose() << " / " << mid.transpose() << " / " << high.transpose());
+    CHECK(low.z() > low.y() + 40);    // viridis(0): dark violet, blue above green
+    CHECK(mid.y() > mid.x() + 40);    // viridis(0.5): teal, green above red
+    CHECK(high.x() > high.z() + 80);  // viridis(1): yellow, red and green far above blue
+    CHECK(high.y() > high.z() + 80);
+  }
+  // Without the scalar every point has the base colour.
+  o.vertex_scalar = nullptr;
+  const Image plain = render(P, Faces(0, 3), o);
+  const int py = static_cast<int>(g.rows[1]);
+  const Eigen::Vector3i left = at(plain, static_cast<int>(g.columns[0]), py),
+                        right = at(plain, static_cast<int>(g.columns[2]), py);
+  for (const Eigen::Vector3i& c : {left, right}) {  // warm clay: red above green above blue
+    CHECK(c.x() > c.y());
+    CHECK(c.y() > c.z());
+  }
+}
+
+TEST_CASE("render: the default point radius follows the spacing of the cloud", "[analysis][render][points]") {
+  // A regular 11×11 grid of spacing h (with a repeated point, which is no neighbour): the nearest other
+  // point is h away from every point, so the radius is 0.85 h exactly.
+  const double h = 0.25;
+  Positions P(122, 3);
+  for (int i = 0; i < 121; ++i) P.row(i) << h * (i % 11), h * (i / 11), 3.0;
+  P.row(121) = P.row(42);
+  CHECK(default_point_radius(P) == Approx(0.85 * h).epsilon(1e-12));
+  // Scaling the cloud scales the radius; a single point has radius 1; no points is an error.
+  CHECK(default_point_radius(Positions(7 * P)) == Approx(0.85 * 7 * h).epsilon(1e-12));
+  CHECK(default_point_radius(Positions(P.topRows(1))) == 1);
+  CHECK_THROWS_AS(default_point_radius(Positions(0, 3)), InvalidInput);
+
+  // Rendered with the default radius the grid reads as a surface: the spheres of a square grid cover it
+  // without gaps (0.85 h > h / √2), so the middle of the picture is covered everywhere.
+  RenderOptions o = top_view(101);
+  const Image image = render(P, Faces(0, 3), o);
+  long gaps = 0;
+  for (int y = 30; y <= 70; ++y)
+    for (int x = 30; x <= 70; ++x) gaps += is_background(image, o, x, y);
+  CHECK(gaps == 0);
+  CHECK(covered_fraction(image, o) > 0.6);
+  // A single point is a sphere in the middle of the frame, not an empty picture.
+  const Image one = render(Positions(P.topRows(1)), Faces(0, 3), o);
+  CHECK_FALSE(is_background(one, o, 50, 50));
+  CHECK(covered_fraction(one, o) > 0.3);
+}
+
+TEST_CASE("render: a soup's faces look alike whichever way they are wound", "[analysis][render]") {
+  Positions P;
+  Faces F;
+  test::icosphere(3, P, F);
+  Faces mixed = F;
+  for (Eigen::Index f = 0; f < F.rows(); f += 3) std::swap(mixed(f, 1), mixed(f, 2));  // a third flipped
+  RenderOptions o;
+  o.width = 160;
+  o.height = 120;
+  const Image consistent = render(P, F, o), soup = render(P, mixed, o);
+  long differ = 0;
+  int largest = 0;
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x) {
+      const int d = (at(consistent, x, y) - at(soup, x, y)).cwiseAbs().maxCoeff();
+      largest = std::max(largest, d);
+      differ += d > 3;
+    }
+  INFO("pixels differing by more than 3: " << differ << ", largest difference " << largest);
+  CHECK(differ == 0);
 }
 
 TEST_CASE("robust scalar range and colour map", "[analysis][render]") {
@@ -237,4 +444,17 @@ TEST_CASE("render: pictures of the test meshes", "[.look]") {
   const Image a = render(positions(knight), faces(knight), y_up),
               b = render(cactus_P, faces(cactus), cactus_coloured);
   write_png(tile_images({a, b}, 2, {"knight 502 V", "cactus: y (0-100%)"}), out + "/sheet.png");
+
+  // A real point cloud (CGAL's b9 scan, 22300 points) with the default radius, plain and coloured by z.
+  const TriangleSoup b9 = load_soup(test::cgal_mesh("b9.ply"));
+  render_png(b9.P, b9.F, out + "/b9.png");
+  const Eigen::VectorXd z = b9.P.col(2);
+  RenderOptions b9_coloured;
+  b9_coloured.vertex_scalar = &z;
+  b9_coloured.scalar_label = "z";
+  render_png(b9.P, b9.F, out + "/b9-z.png", b9_coloured);
+  // The knight with every third face wound the other way, as a soup may come.
+  Faces mixed = faces(knight);
+  for (Eigen::Index f = 0; f < mixed.rows(); f += 3) std::swap(mixed(f, 1), mixed(f, 2));
+  render_png(positions(knight), mixed, out + "/knight-mixed-winding.png", y_up);
 }

@@ -158,9 +158,10 @@ void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& r
   fit_basis(P, region);
   const int m = basis_size();
 
-  // The basis at every point, cached when it fits (every method here gives each point the same number
-  // of basis values; a point with another count switches the cache off): then the solve and the
-  // affine basis below read it instead of evaluating it again.
+  // The basis at every point, cached for methods with control points when it fits (every method here
+  // gives each point the same number of basis values; a point with another count switches the cache
+  // off): the solve and the affine basis below then read it instead of evaluating it again, and so do
+  // deform_controls() and deform_to().
   const long n = P.rows();
   BasisRow probe;
   basis(P.row(0).transpose(), probe);
@@ -171,7 +172,8 @@ void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& r
   cache_width_ = 0;
   cache_index_.resize(0);
   cache_value_.resize(0);
-  if (static_cast<size_t>(n) * width * (sizeof(double) + (cache_dense_ ? 0 : sizeof(int))) <= basis_cache_bytes_) {
+  if (has_control_points() &&
+      static_cast<size_t>(n) * width * (sizeof(double) + (cache_dense_ ? 0 : sizeof(int))) <= basis_cache_bytes_) {
     if (!cache_dense_) cache_index_.resize(n * width);  // uninitialised: filled in parallel below
     cache_value_.resize(n * width);
     std::atomic<bool> uneven{false};

@@ -79,7 +79,8 @@ class SpaceDeformer : public Deformer {
   //! non-finite displacement.
   void deform_controls(const Eigen::MatrixX3d& displacements, Positions& out);
 
-  //! The memory allowed for caching the basis of the prepared points (deform_to, deform_controls); above
+  //! The memory allowed for caching the basis of the prepared points (methods with control points:
+  //! prepare, deform_to, deform_controls); above
   //! it those frames re-evaluate the basis (and prepare() evaluates it twice at the constrained
   //! vertices). Default 1 GB: a lattice (64 values per point, 12 bytes each) up to 1.4M points, a cage of
   //! 186 vertices (8 bytes per value) up to 720k points.

@@ -49,7 +49,11 @@ TEST_CASE("regression: every method runs on every scene and meets its handles", 
     INFO(r.scene << " / " << r.method << ": " << r.error);
     REQUIRE(r.ok);
     CHECK(r.result.allFinite());
-    CHECK(r.handle_error <= 1e-9);
+    // Methods that declare exact constraints meet them to round-off; the space methods meet them in the
+    // least-squares sense (lattice, cages: 2e-5 to 3e-2 here) or at their centres (rbf: 2000 samples of
+    // the 4000 constrained vertices, 1.5e-4 off elsewhere).
+    const bool exact = builtin_methods().make(r.method)->traits().exact_constraints;
+    CHECK(r.handle_error <= (exact ? 1e-9 : 0.05 * bounding_box_diagonal(r.result)));
   }
 }
 

@@ -17,19 +17,19 @@ using namespace msd::bench;
 
 namespace {
 
-// Median milliseconds of an affine frame (out sized by a first frame).
-double frame_ms(Deformer& d, const std::vector<Mat4>& transforms) {
+// Sorted milliseconds of 21 affine frames (out sized by a first frame).
+std::vector<double> frame_ms(Deformer& d, const std::vector<Mat4>& transforms) {
   Positions out;
   d.deform(transforms, out);
-  return time_frames(21, [&](int) { d.deform(transforms, out); })[10];
+  return time_frames(21, [&](int) { d.deform(transforms, out); });
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::printf("Affine frames use the precomputed per-point affine basis (12 multiply-adds per point and handle).\n");
-  std::printf("%-8s %9s %9s %11s %10s %12s %14s\n", "method", "points", "basis", "prepare[s]", "frame[ms]",
-              "Mpoints/s", "controls[ms]");
+  std::printf("%-8s %9s %9s %11s %16s %16s %14s\n", "method", "points", "basis", "prepare[s]", "frame med/min[ms]",
+              "Mpoints/s med/max", "controls[ms]");
   for (const std::string& size : sizes(argc, argv, {"1M"})) {
     SceneOptions o;
     o.resolution = parse_resolution(size);
@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
       auto t0 = Clock::now();
       d->prepare(s.P, s.F, s.region);
       const double prepare = seconds_since(t0);
-      const double frame = frame_ms(*d, s.transforms);
+      const std::vector<double> frame = frame_ms(*d, s.transforms);
       double controls = -1;
       if (d->has_control_points()) {
         Positions out;
@@ -49,8 +49,9 @@ int main(int argc, char** argv) {
         dc(dc.rows() / 2, 2) = 0.01;
         controls = time_frames(5, [&](int) { d->deform_controls(dc, out); })[2];
       }
-      std::printf("%-8s %9ld %9d %11.2f %10.2f %12.0f %14.1f\n", d->name().c_str(), long(s.P.rows()),
-                  d->num_coefficients(), prepare, frame, s.P.rows() / frame / 1e3, controls);
+      std::printf("%-8s %9ld %9d %11.2f %8.2f/%-7.2f %8.0f/%-7.0f %14.1f\n", d->name().c_str(), long(s.P.rows()),
+                  d->num_coefficients(), prepare, frame[10], frame[0], s.P.rows() / frame[10] / 1e3,
+                  s.P.rows() / frame[0] / 1e3, controls);
       std::fflush(stdout);
     }
   }

@@ -211,9 +211,12 @@ void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& r
   point_basis_.setZero(n, cols);
   parallel_for_chunks(n, [&](long i0, long i1) {
     BasisRow row;
+    Eigen::RowVectorXd b(cols);
     for (long i = i0; i < i1; ++i) {
       prepared_basis(P, i, row);
-      for (size_t j = 0; j < row.index.size(); ++j) point_basis_.row(i) += row.value[j] * G.row(row.index[j]);
+      b.setZero();
+      for (size_t j = 0; j < row.index.size(); ++j) b += row.value[j] * G.row(row.index[j]);
+      point_basis_.row(i) = b;
     }
   }, 1024);
   coefficients_.setZero(m, 3);
@@ -237,24 +240,31 @@ void SpaceDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
   for (int k = 0; k < K; ++k)
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 4; ++c) M[12 * k + 4 * r + c] = transforms[k](r, c) - (r == c ? 1.0 : 0.0);
+  // By blocks of points that stay in cache, one coordinate at a time over contiguous columns (rest,
+  // out and b are column-major), so the products vectorise across points.
   const long n = rest_.rows();
-  const double* b = point_basis_.data();
-  const long stride = point_basis_.cols();
+  const double* B = point_basis_.data();
+  const double* rest = rest_.data();
+  double* o = out.data();
   std::atomic<double> largest{0.0};  // largest squared displacement of any point
   parallel_for_chunks(n, [&](long i0, long i1) {
     double local = 0;
-    for (long i = i0; i < i1; ++i) {
-      double d[3] = {0, 0, 0};
-      const double* bi = b + i * stride;
-      for (int k = 0; k < K; ++k) {
-        const double* Mk = M + 12 * k;
-        const double* bk = bi + 4 * k;
-        for (int r = 0; r < 3; ++r) d[r] += Mk[4 * r] * bk[0] + Mk[4 * r + 1] * bk[1] + Mk[4 * r + 2] * bk[2] + Mk[4 * r + 3] * bk[3];
+    for (long s0 = i0; s0 < i1; s0 += 1024) {
+      const long s1 = std::min(i1, s0 + 1024);
+      for (int r = 0; r < 3; ++r) {
+        const double* p = rest + r * n;
+        double* x = o + r * n;
+        for (long i = s0; i < s1; ++i) x[i] = p[i];
+        for (int k = 0; k < K; ++k) {
+          const double* Mk = M + 12 * k + 4 * r;
+          const double *b0 = B + (4 * k) * n, *b1 = b0 + n, *b2 = b1 + n, *b3 = b2 + n;
+          for (long i = s0; i < s1; ++i) x[i] += Mk[0] * b0[i] + Mk[1] * b1[i] + Mk[2] * b2[i] + Mk[3] * b3[i];
+        }
       }
-      out(i, 0) = rest_(i, 0) + d[0];
-      out(i, 1) = rest_(i, 1) + d[1];
-      out(i, 2) = rest_(i, 2) + d[2];
-      local = std::max(local, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      for (long i = s0; i < s1; ++i) {
+        const double dx = o[i] - rest[i], dy = o[n + i] - rest[n + i], dz = o[2 * n + i] - rest[2 * n + i];
+        local = std::max(local, dx * dx + dy * dy + dz * dz);
+      }
     }
     for (double seen = largest.load(); local > seen && !largest.compare_exchange_weak(seen, local);) {
     }

@@ -132,8 +132,9 @@ class SpaceDeformer : public Deformer {
   //! G (m × 4K): coefficients of handle k's affine basis: columns 4k..4k+3 are the solve of the data
   //! (x, y, z, 1) on handle k's vertices, 0 elsewhere.
   Eigen::MatrixXd handle_coefficients_;
-  //! b (#V × 4K, row-major): the affine basis functions at the prepared points, b = Ψ(P) G.
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> point_basis_;
+  //! b (#V × 4K, column-major for frames that vectorise across points): the affine basis functions at
+  //! the prepared points, b = Ψ(P) G.
+  Eigen::MatrixXd point_basis_;
   Eigen::MatrixX3d coefficients_;
   std::vector<double> frame_matrices_;  // K × 12: (T_k − I) rows, per frame
   // Least-norm solve: N (#C×m, row-major sparse) and the Cholesky factor of NᵀN + εI; affine fit.

@@ -246,6 +246,16 @@ class PlyReader {
           prop.coordinate = prop.name[0] - 'x';
         elements_.back().props.push_back(prop);
       } else if (key == "end_header") {
+        // A vertex element must have x, y and z (other spellings, e.g. X Y Z, would read as zeros).
+        for (const Element& e : elements_) {
+          if (e.name != "vertex" || e.count == 0) continue;
+          bool has[3] = {false, false, false};
+          for (const auto& prop : e.props)
+            if (prop.coordinate >= 0) has[prop.coordinate] = true;
+          for (int k = 0; k < 3; ++k)
+            if (!has[k]) fail(std::string("the vertex element has no property '") + char('x' + k) +
+                              "' (properties x, y and z, lower case, give the positions)");
+        }
         break;
       }
       // comment, obj_info: nothing to do

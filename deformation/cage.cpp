@@ -415,7 +415,7 @@ HarmonicCoordinates::HarmonicCoordinates(const Positions& cage_P, const Faces& c
     throw InvalidInput(std::string(who) + ": " + std::to_string(static_cast<long>(bytes / 1e6)) +
                        " MB of node values (" + std::to_string(inside_nodes.size() + mvc_nodes.size()) +
                        " nodes × " + std::to_string(m) +
-                       " cage vertices); lower harmonic_resolution or use fewer cage vertices");
+                       " cage vertices); lower the grid resolution (--harmonic-resolution) or use fewer cage vertices");
   g.row_of.assign(num_nodes, -1);
   int rows = 0;
   for (long id = 0; id < num_nodes; ++id)
@@ -593,9 +593,8 @@ void clip_polytope(std::vector<Polygon>& polys, const Vec3& dir, double offset, 
   polys.swap(out);
 }
 
-}  // namespace
-
-void offset_kdop_cage(const Positions& P, double margin, int subdivisions, Positions& cage_P, Faces& cage_F) {
+// offset_kdop_cage for points whose bounding box is centred at the origin.
+void kdop_cage_near_origin(const Positions& P, double margin, int subdivisions, Positions& cage_P, Faces& cage_F) {
   const char* who = "offset_kdop_cage";
   if (P.rows() == 0) throw InvalidInput(std::string(who) + ": no points to enclose");
   check_finite(P, who, "the points");
@@ -741,6 +740,18 @@ void offset_kdop_cage(const Positions& P, double margin, int subdivisions, Posit
   }
 }
 
+}  // namespace
+
+void offset_kdop_cage(const Positions& P, double margin, int subdivisions, Positions& cage_P, Faces& cage_F) {
+  // Built around the bounding box's centre: the support values d·x of a model far from the origin
+  // (1e8 away) would lose the margin and the clipping tolerance to rounding.
+  check_finite(P, "offset_kdop_cage", "the points");
+  const Eigen::RowVector3d centre =
+      P.rows() > 0 ? Eigen::RowVector3d(0.5 * (P.colwise().minCoeff() + P.colwise().maxCoeff())) : Eigen::RowVector3d::Zero();
+  kdop_cage_near_origin(P.rowwise() - centre, margin, subdivisions, cage_P, cage_F);
+  cage_P.rowwise() += centre;
+}
+
 // =====================================================================================================
 // The deformer
 
@@ -801,10 +812,8 @@ void CageDeformer::fit_basis(const Positions& P, const Region&) {
 }
 
 std::string CageDeformer::overshoot_advice() const {
-  return "constraints with different motions pull on the same cage vertices; raise "
-         "least_norm.regularization, "
-         "refine the cage (subdivisions, or a user cage with vertices near the handles) or move the cage "
-         "vertices with deform_controls()";
+  return "constraints with different motions pull on the same cage vertices, which the least-norm solve "
+         "amplifies: give a cage drawn around the parts that move (--cage), or use rbf";
 }
 
 void CageDeformer::basis(const Vec3& x, BasisRow& row) const {

@@ -197,12 +197,14 @@ void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& r
   }
   prepare_solve(P, constrained_);
 
-  // Handle k's affine basis: the solve of the data (x, y, z, 1) on its vertices, zero elsewhere.
+  // Handle k's affine basis: the solve of the data (x, y, z, 1) on its vertices, zero elsewhere, with
+  // x, y, z relative to the bounding box's centre (a model far from the origin keeps its precision).
+  origin_ = 0.5 * (P.colwise().minCoeff() + P.colwise().maxCoeff()).transpose();
   const int nc = static_cast<int>(constrained_.size());
   const int cols = 4 * num_handles_;
   Eigen::MatrixXd data = Eigen::MatrixXd::Zero(nc, cols);
   for (int c = 0; c < nc; ++c)
-    if (handle_of_[c] >= 0) data.row(c).segment<4>(4 * handle_of_[c]) << P.row(constrained_[c]), 1.0;
+    if (handle_of_[c] >= 0) data.row(c).segment<4>(4 * handle_of_[c]) << P.row(constrained_[c]) - origin_.transpose(), 1.0;
   Eigen::MatrixXd G;
   solve(data, G);
   handle_coefficients_ = G;
@@ -236,10 +238,16 @@ void SpaceDeformer::prepared_basis(const Positions& P, long v, BasisRow& row) co
 
 void SpaceDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
   const int K = num_handles_;
-  double* M = frame_matrices_.data();  // handle k: (T_k − I) top three rows, row-major 3×4
-  for (int k = 0; k < K; ++k)
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c) M[12 * k + 4 * r + c] = transforms[k](r, c) - (r == c ? 1.0 : 0.0);
+  // Handle k: T_k p − p = (A − I)(p − o) + (A − I) o + t for the centre o, as a row-major 3×4.
+  double* M = frame_matrices_.data();
+  for (int k = 0; k < K; ++k) {
+    const Mat3 linear = transforms[k].topLeftCorner<3, 3>() - Mat3::Identity();
+    const Vec3 shift = linear * origin_ + transforms[k].topRightCorner<3, 1>();
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) M[12 * k + 4 * r + c] = linear(r, c);
+      M[12 * k + 4 * r + 3] = shift[r];
+    }
+  }
   // By blocks of points that stay in cache, one coordinate at a time over contiguous columns (rest,
   // out and b are column-major), so the products vectorise across points.
   const long n = rest_.rows();

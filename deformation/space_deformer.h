@@ -127,10 +127,11 @@ class SpaceDeformer : public Deformer {
 
   Positions rest_;
   double rest_diagonal_ = 0, largest_target_move_ = 0;
+  Vec3 origin_ = Vec3::Zero();  // centre of the rest bounding box: the affine basis is relative to it
   std::vector<int> constrained_, handle_of_;
   int num_handles_ = 0;
   //! G (m × 4K): coefficients of handle k's affine basis: columns 4k..4k+3 are the solve of the data
-  //! (x, y, z, 1) on handle k's vertices, 0 elsewhere.
+  //! (x, y, z, 1) − (origin_, 0) on handle k's vertices, 0 elsewhere.
   Eigen::MatrixXd handle_coefficients_;
   //! b (#V × 4K, column-major for frames that vectorise across points): the affine basis functions at
   //! the prepared points, b = Ψ(P) G.

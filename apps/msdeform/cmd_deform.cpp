@@ -1,5 +1,6 @@
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include "apps/msdeform/commands.h"
@@ -15,6 +16,22 @@ namespace msd::cli {
 
 namespace {
 using Clock = std::chrono::steady_clock;
+// Whether two paths name one file (an existing one, or the same spelling once made absolute).
+bool same_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (fs::exists(a, error) && fs::exists(b, error)) return fs::equivalent(a, b, error);
+  return fs::weakly_canonical(a, error) == fs::weakly_canonical(b, error);
+}
+// Refuses an output with an unknown format or naming one of the inputs (which it would replace).
+void check_output(const std::string& path, const char* option, const std::vector<std::string>& inputs) {
+  const std::string ext = file_extension(path);
+  if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
+    throw InvalidInput(std::string(option) + " " + path + ": unknown format '" + ext + "' (supported: .off .obj .ply .stl)");
+  for (const std::string& input : inputs)
+    if (!input.empty() && same_file(path, input))
+      throw InvalidInput(std::string(option) + " " + path + " is one of the inputs; it would be replaced. Write elsewhere");
+}
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 // What to change when a multi-scale frame folded triangles over its base.
 std::string fold_advice(const Deformer& deformer) {
@@ -46,9 +63,23 @@ void add_deform_command(CLI::App& app) {
                   "lattice, cage-mvc, cage-harmonic: also write the deformed control points (the lattice's as a point "
                   "cloud, the cage with its faces; .off .obj .ply)");
   cmd->callback([=] {
+    // Outputs are checked before any work: a known format, and never one of the inputs or each other.
+    const std::vector<std::string> inputs = {edit->mesh, edit->sel, edit->def, method->cage_file};
+    check_output(*output, "-o", inputs);
+    if (!controls_output->empty()) {
+      check_output(*controls_output, "--controls-output", inputs);
+      if (same_file(*controls_output, *output)) throw InvalidInput("--controls-output and -o name the same file");
+    }
     const EditCase c = edit->load();
     std::unique_ptr<Deformer> deformer = method->make(c);
     if (deformer->traits().domain == DeformerDomain::Surface) require_surface(c, method->method_name());
+    const auto* space = dynamic_cast<const SpaceDeformer*>(deformer.get());
+    if (!controls_output->empty() && !(space && space->has_control_points()))
+      throw InvalidInput("--controls-output applies to methods with control points (lattice, cage-mvc, cage-harmonic), "
+                         "not " + deformer->name());
+    if (!controls_output->empty() && file_extension(*controls_output) == ".stl" && deformer->name() == "lattice")
+      throw InvalidInput("--controls-output " + *controls_output + ": a lattice's control points have no faces, which "
+                         "STL cannot store; use .off, .obj or .ply");
     const Positions& rest = c.P;
     auto t0 = Clock::now();
     deformer->prepare(c.P, c.F, c.region);
@@ -59,10 +90,6 @@ void add_deform_command(CLI::App& app) {
     t0 = Clock::now();
     deformer->deform(c.transforms, out);
     const double frame_ms = ms_since(t0);
-    const auto* space = dynamic_cast<const SpaceDeformer*>(deformer.get());
-    if (!controls_output->empty() && !(space && space->has_control_points()))
-      throw InvalidInput("--controls-output applies to methods with control points (lattice, cage-mvc, cage-harmonic), "
-                         "not " + deformer->name());
     save_mesh(out, c.F, *output);
     if (!controls_output->empty()) {
       save_mesh(space->control_points() + space->coefficients(), space->control_faces(), *controls_output);
@@ -93,9 +120,12 @@ void add_deform_command(CLI::App& app) {
     if (deformer->traits().solve == DeformerSolve::Iterative)
       std::printf("  frame: %d iterations, relative residual %.3g%s\n", report.iterations, report.residual,
                   report.converged ? "" : " (not converged)");
-    if (report.constraint_error >= 0)
-      std::printf("  constraints: largest distance of a constrained vertex from its target %.3g (%.3g of the "
-                  "bounding-box diagonal)\n", report.constraint_error, report.constraint_error / bounding_box_diagonal(rest));
+    if (report.constraint_error >= 0) {
+      const double diag = bounding_box_diagonal(rest);
+      std::printf("  constraints: largest distance of a constrained vertex from its target %.3g", report.constraint_error);
+      if (diag > 0) std::printf(" (%.3g of the bounding-box diagonal)", report.constraint_error / diag);
+      std::printf("\n");
+    }
     if (report.folded_faces >= 0)
       std::printf("  folded triangles (normal turned against the deformed base's): %d\n", report.folded_faces);
     for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
@@ -104,8 +134,8 @@ void add_deform_command(CLI::App& app) {
     for (size_t k = 0; k < c.transforms.size(); ++k) {
       const double det = c.transforms[k].topLeftCorner<3, 3>().determinant();
       if (!(det > 0))
-        std::fprintf(stderr, "warning: the transform of handle %zu is %s (determinant %.3g): it turns the handle "
-                     "inside out\n", k, det < 0 ? "a reflection" : "singular", det);
+        std::fprintf(stderr, "warning: the transform of handle %zu is %s (determinant %.3g)\n", k,
+                     det < 0 ? "a reflection: it turns the handle inside out" : "singular: it flattens the handle", det);
     }
     std::printf("  wrote %s\n", output->c_str());
   });

@@ -298,6 +298,13 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
   CHECK_THROWS_AS(load_mesh(write("garbage.obj", garbage)), InvalidInput);
   CHECK_THROWS_WITH(load_mesh(write("empty.off", "OFF\n0 0 0\n")), Contains("no vertices"));
   CHECK_THROWS_WITH(load_mesh(write("nofaces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n")), Contains("no faces"));
+  // Positions spelled otherwise than x, y, z (or one missing) would read as zeros: refused by name.
+  CHECK_THROWS_WITH(load_soup(write("upper.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float X\n"
+                                                 "property float Y\nproperty float Z\nend_header\n1 2 3\n")),
+                    Contains("line 7") && Contains("no property 'x'"));
+  CHECK_THROWS_WITH(load_soup(write("noz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                                               "property float y\nend_header\n1 2\n")),
+                    Contains("no property 'z'"));
   CHECK_THROWS_WITH(load_mesh(write("nan.off", "OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n")),
                     Contains("line 4") && Contains("non-finite"));
   CHECK_THROWS_WITH(load_mesh(write("inf.obj", "v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n")),

@@ -205,6 +205,10 @@ class CageDeformer : public SpaceDeformer {
   //! The cage's remedies: a larger regularisation, a finer cage (more vertices near the constraints), or
   //! editing the cage vertices directly.
   std::string overshoot_advice() const override;
+  std::string missed_advice() const override {
+    return "the cage's vertices are too far from the constrained parts to move them apart: give a cage drawn "
+           "around them (--cage), or use rbf";
+  }
 
  private:
   std::string name_;

@@ -42,6 +42,9 @@ class LatticeDeformer : public SpaceDeformer {
   int basis_size() const override { return (cells_ + Eigen::Vector3i::Constant(3)).prod(); }
   void basis(const Vec3& x, BasisRow& row) const override;
   LeastNormOptions least_norm_options() const override { return options_.least_norm; }
+  std::string missed_advice() const override {
+    return "constraints with different motions share lattice cells: use more cells (--lattice-cells), or rbf";
+  }
   std::string overshoot_advice() const override {
     return "constraints that conflict within one cell's support are amplified by the least-norm solve: use more "
            "cells (--lattice-cells) so that they fall into different cells, or rbf";

@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "core/errors.h"
@@ -56,7 +57,11 @@ void RbfDeformer::fit_basis(const Positions& P, const Region& region) {
   std::sort(centre_rows_.begin(), centre_rows_.end());
   const long n = static_cast<long>(centre_rows_.size());
   centres_.resize(n, 3);
-  for (long j = 0; j < n; ++j) centres_.row(j) = (C.row(centre_rows_[j]) - origin_.transpose()) / scale_;
+  centre_vertices_.resize(n);
+  for (long j = 0; j < n; ++j) {
+    centres_.row(j) = (C.row(centre_rows_[j]) - origin_.transpose()) / scale_;
+    centre_vertices_[j] = constrained[centre_rows_[j]];
+  }
   // The polynomial's directions: principal axes along which the centres extend (1e-6 of the widest).
   const Vec3 mean = centres_.colwise().mean().transpose();
   const Mat3 covariance = (centres_.rowwise() - mean.transpose()).transpose() * (centres_.rowwise() - mean.transpose()) / std::max<long>(n, 1);
@@ -95,9 +100,19 @@ void RbfDeformer::prepare_solve(const Positions&, const std::vector<int>&) {
   auto factor = std::make_shared<Factor>();
   factor->lu.compute(A);
   const double rcond = factor->lu.rcond();
-  if (!(rcond > 1e-15))
-    throw SolverError("rbf: the interpolation system of " + std::to_string(n) + " centres is singular (reciprocal "
-                      "condition " + std::to_string(rcond) + ")");
+  if (!(rcond > 1e-15)) {
+    // Name the closest pair of centres: nearly coincident constraints are the usual cause.
+    long a = 0, b = 0;
+    double closest = std::numeric_limits<double>::infinity();
+    for (long i = 0; i < n; ++i)
+      for (long j = i + 1; j < n; ++j)
+        if (const double d = (centres_.row(i) - centres_.row(j)).norm(); d < closest) closest = d, a = i, b = j;
+    char figures[64];
+    std::snprintf(figures, sizeof(figures), "%.3g", closest * scale_);
+    throw SolverError("rbf: the interpolation system of " + std::to_string(n) + " centres is singular; the closest "
+                      "centres are constrained vertices " + std::to_string(centre_vertices_[a]) + " and " +
+                      std::to_string(centre_vertices_[b]) + ", " + figures + " apart: unconstrain one or move them apart");
+  }
   factor_ = std::move(factor);
 }
 

@@ -40,6 +40,10 @@ class RbfDeformer : public SpaceDeformer {
   bool exact_constraints() const override { return false; }
   void prepare_solve(const Positions& P, const std::vector<int>& constrained) override;
   void solve(const Eigen::MatrixXd& values, Eigen::MatrixXd& coefficients) const override;
+  std::string missed_advice() const override {
+    return "the constrained vertices that are not centres are off: raise --max-centres (constrained vertices at "
+           "one position with different targets cannot both be met)";
+  }
   std::string overshoot_advice() const override {
     return "constraints close together with different motions make the triharmonic map overshoot between and "
            "beyond them: move them apart, or use a surface method";
@@ -50,6 +54,7 @@ class RbfDeformer : public SpaceDeformer {
   std::string name_ = "rbf";
   Positions centres_;            // scaled: (c − origin) / scale
   std::vector<int> centre_rows_;  // constrained-list row of each centre
+  std::vector<int> centre_vertices_;  // and its vertex
   Vec3 origin_ = Vec3::Zero();
   double scale_ = 1;
   Eigen::Matrix<double, 3, Eigen::Dynamic> axes_;  // polynomial directions (principal axes the centres span)

@@ -18,6 +18,8 @@ namespace {
 constexpr int kDenseLimit = 4000;
 // A frame warns when some point moves this many times farther than the farthest-moving constraint target.
 constexpr double kOvershoot = 2.0;
+// A frame warns when a constrained vertex ends farther than this fraction of the diagonal from its target.
+constexpr double kMissed = 0.05;
 }  // namespace
 
 // The least-norm solve of (9.13): N (#C×m) and the factor of NᵀN + εI; the affine fit's
@@ -357,6 +359,10 @@ void SpaceDeformer::check_overshoot(double largest_move) {
   frame_report_.warnings.push_back(name() + ": points move up to " + figures + "; " + overshoot_advice());
 }
 
+std::string SpaceDeformer::missed_advice() const {
+  return "the method meets its constraints only in the least-squares sense, and these it cannot separate";
+}
+
 std::string SpaceDeformer::overshoot_advice() const {
   return "constraints close together with different motions are amplified; move them apart or use another method";
 }
@@ -372,6 +378,12 @@ void SpaceDeformer::measure_constraints(const Positions& out, const Positions* t
   }
   frame_report_.constraint_error = error;
   largest_target_move_ = move;
+  if (error > kMissed * rest_diagonal_) {
+    char figures[96];
+    std::snprintf(figures, sizeof(figures), "%.3g of the bounding-box diagonal", error / rest_diagonal_);
+    frame_report_.warnings.push_back(name() + ": a constrained vertex ends " + figures + " from its target; " +
+                                     missed_advice());
+  }
 }
 
 }  // namespace msd

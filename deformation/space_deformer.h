@@ -105,6 +105,9 @@ class SpaceDeformer : public Deformer {
   //! What to change when a frame moves some point more than twice as far as any constraint target
   //! (the linear solve amplified conflicting constraints); appended to that frame's warning.
   virtual std::string overshoot_advice() const;
+  //! What to change when a frame leaves a constrained vertex more than 5 % of the bounding-box diagonal
+  //! from its target; appended to that frame's warning.
+  virtual std::string missed_advice() const;
   //! ψ(p_v) of vertex v of the points being prepared (P, as given to prepare_solve), from the cache when
   //! the basis of every point fits in memory, else evaluated.
   void prepared_basis(const Positions& P, long v, BasisRow& row) const;

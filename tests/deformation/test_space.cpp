@@ -332,3 +332,37 @@ TEST_CASE("space methods: a soup of 360 inconsistently oriented boxes with three
 
 }  // namespace
 }  // namespace msd
+
+namespace msd {
+namespace {
+
+TEST_CASE("space methods: far from the origin, and a badly missed constraint is a warning", "[space]") {
+  const Scene& s = bar();
+  const double diag = bounding_box_diagonal(s.P);
+  // The same edit 1e8 away along (1, 1, 1): every method still works and meets its targets as closely
+  // as at the origin, up to the coordinates' precision (1e8 · 2⁻⁵² ≈ 2e-8).
+  const Vec3 offset = Vec3::Constant(1e8);
+  Positions far = s.P.rowwise() + offset.transpose();
+  std::vector<Mat4> T = s.transforms;
+  for (Mat4& t : T) t.topRightCorner<3, 1>() += offset - t.topLeftCorner<3, 3>() * offset;
+  for (auto& d : space_methods()) {
+    INFO(d->name());
+    d->prepare(s.P, s.F, s.region);
+    d->deform(s.transforms);
+    const double near_error = d->frame_report().constraint_error;
+    d->prepare(far, s.F, s.region);
+    const Positions out = d->deform(T);
+    CHECK(out.allFinite());
+    CHECK(d->frame_report().constraint_error <= near_error + 1e-6 * diag);
+  }
+  // Two centres cannot hold two rings: the frame says how far off it is and what to change.
+  RbfDeformer two(RbfOptions{2});
+  two.prepare(s.P, s.F, s.region);
+  two.deform(s.transforms);
+  REQUIRE(two.frame_report().constraint_error > 0.05 * diag);
+  REQUIRE(two.frame_report().warnings.size() == 1);
+  CHECK_THAT(two.frame_report().warnings[0], Catch::Matchers::Contains("--max-centres"));
+}
+
+}  // namespace
+}  // namespace msd

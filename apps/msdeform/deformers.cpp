@@ -197,12 +197,13 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   scoped_options.push_back({space->add_option("--cage-subdivisions", settings.cage.subdivisions,
                                               "cage-*, generated cage: midpoint subdivisions of the 26-DOP (each "
                                               "quadruples its triangles: more control vertices)")
-                                ->check(CLI::Range(0, 4))
+                                ->check(CLI::Range(0, 3))
                                 ->capture_default_str(),
                             cages});
   scoped_options.push_back({space->add_option("--harmonic-resolution", settings.cage.harmonic_resolution,
-                                              "cage-harmonic: grid cells along the cage's longest side")
-                                ->check(CLI::Range(4, 1024))
+                                              "cage-harmonic: grid cells along the cage's longest side (128: about "
+                                              "40 s and 4 GB with a 186-vertex cage)")
+                                ->check(CLI::Range(4, 128))
                                 ->capture_default_str(),
                             {"cage-harmonic"}});
   scoped_options.push_back({space->add_option("--max-centres", settings.rbf.max_centres,
@@ -247,7 +248,17 @@ MethodSettings DeformerOptions::method_settings(const EditCase& edit) const {
   if (tolerance_option && tolerance_option->count() > 0) s.arap.tolerance = s.primo.tolerance = tolerance;
   s.lattice.least_norm.affine_part = s.cage.least_norm.affine_part = !seed_least_norm;
   if (!cage_file.empty()) {
-    const Mesh cage = load_mesh(cage_file);
+    for (const Scoped& scoped : scoped_options)
+      if (scoped.option->count() > 0 &&
+          (scoped.option->get_name() == "--cage-margin" || scoped.option->get_name() == "--cage-subdivisions"))
+        throw InvalidInput(scoped.option->get_name() + " shapes the generated cage; with --cage the given cage is used as it is");
+    Mesh cage;
+    try {
+      cage = load_mesh(cage_file);
+    } catch (const Error& e) {
+      throw InvalidInput(std::string("--cage: the cage must be a closed, manifold, consistently oriented triangle "
+                                     "mesh: ") + e.what());
+    }
     s.cage.cage_P = positions(cage);
     s.cage.cage_F = faces(cage);
   }

@@ -13,8 +13,34 @@
 
 #include "core/mesh.h"
 #include "core/region.h"
+#include "core/scenes.h"
 
 namespace msd::test {
+
+// The bumpy bar bent by 120° at about 2500 vertices: its fixed and handle rings span all three dimensions.
+inline const Scene& bent_bar() {
+  static const Scene s = [] {
+    SceneOptions o;
+    o.resolution = 2500;
+    return make_scene("bar-bend120", o);
+  }();
+  return s;
+}
+
+// A general affine map: shear, anisotropic scale and a translation.
+inline Mat4 general_affine() {
+  Mat4 T = Mat4::Identity();
+  T.topLeftCorner<3, 3>() << 1.2, 0.3, -0.1, 0.05, 0.9, 0.2, -0.15, 0.1, 1.1;
+  T.topRightCorner<3, 1>() = Vec3(0.4, -0.3, 0.2);
+  return T;
+}
+
+// T applied to every row of P.
+inline Positions transformed(const Mat4& T, const Positions& P) {
+  Positions out(P.rows(), 3);
+  for (Eigen::Index v = 0; v < P.rows(); ++v) out.row(v) = transform_point(T, P.row(v)).transpose();
+  return out;
+}
 
 inline std::string shared_data(const std::string& name) { return std::string(MSD_SHARED_DATA) + "/" + name; }
 inline std::string cgal_mesh(const std::string& name) { return std::string(MSD_CGAL_DATA) + "/data/meshes/" + name; }

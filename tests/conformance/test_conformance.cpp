@@ -55,16 +55,6 @@ const Catalogue& catalogue() {
   return c;
 }
 
-// The bumpy bar bent by 120°: its fixed and handle rings span all three dimensions.
-const Scene& bar() {
-  static const Scene s = [] {
-    SceneOptions o;
-    o.resolution = 2500;
-    return make_scene("bar-bend120", o);
-  }();
-  return s;
-}
-
 // A rigid motion: rotation by 0.7 rad about (1, 2, 3) and a translation.
 Mat4 rigid() {
   Mat4 T = Mat4::Identity();
@@ -86,7 +76,7 @@ void for_every_method(F&& f) {
 }
 
 TEST_CASE("conformance: constraints, frame report and reset", "[conformance]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   const double diag = bounding_box_diagonal(s.P);
   for_every_method([&](Deformer& d) {
     const DeformerTraits t = d.traits();
@@ -126,7 +116,7 @@ TEST_CASE("conformance: constraints, frame report and reset", "[conformance]") {
 
 TEST_CASE("conformance: a rigid motion (a translation for every method) of all constrained vertices moves the whole shape",
           "[conformance]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   const double diag = bounding_box_diagonal(s.P);
   std::vector<int> codes = s.region.codes();
   for (int& c : codes)
@@ -191,7 +181,7 @@ TEST_CASE("conformance: explicit targets equal the affine frame, and linear fram
 }
 
 TEST_CASE("conformance: space methods deform any points, with or without faces", "[conformance]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   for_every_method([&](Deformer& d) {
     Positions mapped;
     if (d.traits().domain != DeformerDomain::Space) {
@@ -278,7 +268,7 @@ TEST_CASE("conformance: the catalogue refuses unknown and duplicate names", "[co
   CHECK_THROWS_WITH(builtin_methods().make("multiscale-vectors", nested), Contains("itself multi-scale"));
   MethodSettings lattice_base;  // any row can deform the base, e.g. the space lattice fixture
   lattice_base.base_method = "test-lattice";
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   std::unique_ptr<Deformer> d = catalogue().make("multiscale-normal", lattice_base);
   d->prepare(s.P, s.F, s.region);
   CHECK(d->deform(s.transforms).allFinite());

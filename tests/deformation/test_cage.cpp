@@ -386,28 +386,6 @@ TEST_CASE("offset k-DOP cage: closed, manifold, outward and enclosing on every b
 // ---------------------------------------------------------------------------------------------------
 // The deformer
 
-const Scene& bar() {
-  static const Scene s = [] {
-    SceneOptions o;
-    o.resolution = 2500;
-    return make_scene("bar-bend120", o);
-  }();
-  return s;
-}
-
-Mat4 affine() {
-  Mat4 T = Mat4::Identity();
-  T.topLeftCorner<3, 3>() << 1.1, 0.2, -0.1, 0.05, 0.95, 0.15, -0.1, 0.1, 1.05;
-  T.topRightCorner<3, 1>() = Vec3(0.3, -0.2, 0.1);
-  return T;
-}
-
-Positions apply(const Mat4& T, const Positions& P) {
-  Positions out(P.rows(), 3);
-  for (Eigen::Index v = 0; v < P.rows(); ++v) out.row(v) = transform_point(T, P.row(v)).transpose();
-  return out;
-}
-
 std::vector<CageOptions> both_kinds() {
   CageOptions mvc, harmonic;
   harmonic.coordinates = CageCoordinates::Harmonic;
@@ -416,7 +394,7 @@ std::vector<CageOptions> both_kinds() {
 }
 
 TEST_CASE("cage deformer: an affine motion of every constraint moves every point by it", "[cage]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   const double diag = diagonal(s.P);
   std::vector<int> codes = s.region.codes();
   for (int& c : codes)
@@ -427,13 +405,13 @@ TEST_CASE("cage deformer: an affine motion of every constraint moves every point
     INFO(d.name());
     d.prepare(s.P, s.F, one);
     CHECK(d.prepare_warnings().empty());
-    CHECK(test::max_row_distance(d.deform({affine()}), apply(affine(), s.P)) <= 1e-8 * diag);
+    CHECK(test::max_row_distance(d.deform({test::general_affine()}), test::transformed(test::general_affine(), s.P)) <= 1e-8 * diag);
     CHECK(d.frame_report().constraint_error <= 1e-8 * diag);
   }
 }
 
 TEST_CASE("cage deformer: the frame report states the constraint residual it leaves", "[cage]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   for (const CageOptions& options : both_kinds()) {
     CageDeformer d(options);
     INFO(d.name());
@@ -448,7 +426,7 @@ TEST_CASE("cage deformer: the frame report states the constraint residual it lea
 
 TEST_CASE("cage deformer: editing the cage vertices, translating the whole cage translates everything",
           "[cage]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   const double diag = diagonal(s.P);
   for (const CageOptions& options : both_kinds()) {
     CageDeformer d(options);
@@ -474,7 +452,7 @@ TEST_CASE("cage deformer: editing the cage vertices, translating the whole cage 
 
 TEST_CASE("cage deformer: a user cage is checked, flipped when inward and warns about points outside it",
           "[cage]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   const double diag = diagonal(s.P);
   Positions sphere;
   Faces F;

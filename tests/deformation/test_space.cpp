@@ -14,29 +14,6 @@
 namespace msd {
 namespace {
 
-const Scene& bar() {
-  static const Scene s = [] {
-    SceneOptions o;
-    o.resolution = 2500;
-    return make_scene("bar-bend120", o);
-  }();
-  return s;
-}
-
-// A general affine map (shear, anisotropic scale, rotation, translation).
-Mat4 affine() {
-  Mat4 T = Mat4::Identity();
-  T.topLeftCorner<3, 3>() << 1.2, 0.3, -0.1, 0.05, 0.9, 0.2, -0.15, 0.1, 1.1;
-  T.topRightCorner<3, 1>() = Vec3(0.4, -0.3, 0.2);
-  return T;
-}
-
-Positions apply(const Mat4& T, const Positions& P) {
-  Positions out(P.rows(), 3);
-  for (Eigen::Index v = 0; v < P.rows(); ++v) out.row(v) = transform_point(T, P.row(v));
-  return out;
-}
-
 // Every constrained vertex in one handle.
 Region all_constrained_one_handle(const Region& region) {
   std::vector<int> codes = region.codes();
@@ -57,26 +34,26 @@ std::vector<std::unique_ptr<SpaceDeformer>> space_methods() {
 }
 
 TEST_CASE("space methods: an affine motion of every constraint moves every point by it", "[space]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   const double diag = bounding_box_diagonal(s.P);
   const Region one = all_constrained_one_handle(s.region);
-  const Positions expected = apply(affine(), s.P);
+  const Positions expected = test::transformed(test::general_affine(), s.P);
   for (auto& d : space_methods()) {
     INFO(d->name());
     d->prepare(s.P, s.F, one);
-    CHECK(test::max_row_distance(d->deform({affine()}), expected) <= 1e-8 * diag);
+    CHECK(test::max_row_distance(d->deform({test::general_affine()}), expected) <= 1e-8 * diag);
     // The map is affine in space too: points far outside the shape follow it where the method defines
     // it everywhere (RBF; the lattice clamps outside its box).
     Positions probe(2, 3), mapped;
     probe << s.P.row(0) * 0.5 + s.P.row(s.P.rows() - 1) * 0.5, s.P.colwise().mean();
     d->evaluate(probe, mapped);
-    CHECK(test::max_row_distance(mapped, apply(affine(), probe)) <= 1e-8 * diag);
+    CHECK(test::max_row_distance(mapped, test::transformed(test::general_affine(), probe)) <= 1e-8 * diag);
   }
 }
 
 TEST_CASE("lattice: the least-norm solve of (9.13) meets few constraints and states the residual of many",
           "[space][lattice]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   const double diag = bounding_box_diagonal(s.P);
   LatticeDeformer lattice;
   lattice.prepare(s.P, s.F, s.region);
@@ -99,7 +76,7 @@ TEST_CASE("lattice: the least-norm solve of (9.13) meets few constraints and sta
 
 TEST_CASE("lattice: without the affine part, control points no constraint sees stay at rest (seed 9.13)",
           "[space][lattice]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   LatticeOptions o;
   o.least_norm.affine_part = false;
   LatticeDeformer lattice(o);
@@ -122,7 +99,7 @@ TEST_CASE("lattice: without the affine part, control points no constraint sees s
 }
 
 TEST_CASE("lattice: control-point editing, linear precision and clamping outside the box", "[space][lattice]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   const double diag = bounding_box_diagonal(s.P);
   LatticeDeformer lattice;
   lattice.prepare(s.P, s.F, s.region);
@@ -130,10 +107,10 @@ TEST_CASE("lattice: control-point editing, linear precision and clamping outside
   REQUIRE(C.rows() == lattice.num_coefficients());
   // Moving the control points by an affine map moves every point by it (the lattice reproduces
   // linear functions: Greville points).
-  const Eigen::MatrixX3d moved = apply(affine(), C) - C;
+  const Eigen::MatrixX3d moved = test::transformed(test::general_affine(), C) - C;
   Positions out;
   lattice.deform_controls(moved, out);
-  CHECK(test::max_row_distance(out, apply(affine(), s.P)) <= 1e-9 * diag);
+  CHECK(test::max_row_distance(out, test::transformed(test::general_affine(), s.P)) <= 1e-9 * diag);
   CHECK(lattice.frame_report().constraint_error == -1);
   // One control point moved: only points in its 4×4×4-cell support move.
   Eigen::MatrixX3d one = Eigen::MatrixX3d::Zero(C.rows(), 3);
@@ -160,7 +137,7 @@ TEST_CASE("lattice: control-point editing, linear precision and clamping outside
 }
 
 TEST_CASE("rbf: interpolates every constraint and subsamples beyond max_centres", "[space][rbf]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   const double diag = bounding_box_diagonal(s.P);
   RbfDeformer rbf;
   rbf.prepare(s.P, s.F, s.region);
@@ -337,7 +314,7 @@ namespace msd {
 namespace {
 
 TEST_CASE("space methods: far from the origin, and a badly missed constraint is a warning", "[space]") {
-  const Scene& s = bar();
+  const Scene& s = test::bent_bar();
   const double diag = bounding_box_diagonal(s.P);
   // The same edit 1e8 away along (1, 1, 1): every method still works and meets its targets as closely
   // as at the origin, up to the coordinates' precision (1e8 · 2⁻⁵² ≈ 2e-8).

@@ -257,6 +257,9 @@ void add_compare_command(CLI::App& app) {
         const std::string base = (fs::path(a->survey) / name).string();
         cases.push_back(file_case(base + ".off", base + ".sel", base + ".def"));
       }
+    if (!a->method.cage_file.empty() && cases.size() != 1)
+      throw InvalidInput("--cage encloses one input: give it with --mesh alone (no --scenes or --survey), or leave "
+                         "it out to generate a cage around each edit");
     std::vector<MethodSettings> settings;  // per case (a subdivision base takes the case's control mesh)
     for (const auto& c : cases) settings.push_back(a->method.method_settings(c));
     const fs::path out(a->output);

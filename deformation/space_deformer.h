@@ -73,17 +73,17 @@ class SpaceDeformer : public Deformer {
   //! Triangles over the control points for pictures and files (a cage's faces); none for a lattice (#F×3).
   virtual Faces control_faces() const { return Faces(0, 3); }
   //! Control-point editing (seed 9.5): moves control point l by displacements(l) (m×3) and writes the
-  //! deformed prepared points (#V×3) into out. Constraints are not enforced (the frame report's
-  //! constraint_error measures how far the handle vertices are from their rest: −1, not measured).
+  //! deformed prepared points (#V×3) into out. Constraints are neither enforced nor measured (the frame
+  //! report's constraint_error stays −1).
   //! \throw UsageError without control points, before prepare or for a wrong shape; InvalidInput for a
   //! non-finite displacement.
   void deform_controls(const Eigen::MatrixX3d& displacements, Positions& out);
 
   //! The memory allowed for caching the basis of the prepared points (methods with control points:
-  //! prepare, deform_to, deform_controls); above
-  //! it those frames re-evaluate the basis (and prepare() evaluates it twice at the constrained
-  //! vertices). Default 1 GB: a lattice (64 values per point, 12 bytes each) up to 1.4M points, a cage of
-  //! 186 vertices (8 bytes per value) up to 720k points.
+  //! prepare, deform_to, deform_controls); above it those frames re-evaluate the basis (and prepare()
+  //! evaluates it twice at the constrained vertices). Set before prepare(). Default 1 GB: a lattice (64
+  //! values per point, 12 bytes each) up to 1.4M points, a cage of 186 vertices (8 bytes per value) up to
+  //! 720k points.
   void set_basis_cache_bytes(size_t bytes) { basis_cache_bytes_ = bytes; }
 
  protected:
@@ -140,7 +140,7 @@ class SpaceDeformer : public Deformer {
   //! the prepared points, b = Ψ(P) G.
   Eigen::MatrixXd point_basis_;
   Eigen::MatrixX3d coefficients_;
-  std::vector<double> frame_matrices_;  // K × 12: (T_k − I) rows, per frame
+  std::vector<double> frame_matrices_;  // K × 12: per frame, T_k − I relative to origin_, row-major 3×4
   // Least-norm solve: N (#C×m, row-major sparse) and the Cholesky factor of NᵀN + εI; affine fit.
   struct LeastNorm;
   std::shared_ptr<LeastNorm> least_norm_;

@@ -36,7 +36,8 @@ class RbfDeformer : public SpaceDeformer {
   void fit_basis(const Positions& P, const Region& region) override;
   int basis_size() const override { return static_cast<int>(centres_.rows()) + 1 + static_cast<int>(axes_.cols()); }
   void basis(const Vec3& x, BasisRow& row) const override;
-  //! Exact when every constrained vertex is a centre (or a duplicate of one).
+  //! Declared inexact: RBF meets a constrained vertex exactly only when it is a centre (all of them up to
+  //! max_centres); the frame report's constraint_error gives the distance either way.
   bool exact_constraints() const override { return false; }
   void prepare_solve(const Positions& P, const std::vector<int>& constrained) override;
   void solve(const Eigen::MatrixXd& values, Eigen::MatrixXd& coefficients) const override;

@@ -395,8 +395,7 @@ FileContents read_stl(std::string_view text, const std::string& path, const std:
 
 FileContents read_contents(const std::string& path, const std::string& who) {
   const std::string ext = file_extension(path);
-  if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
-    throw InvalidInput(who + ": " + path + ": unknown format '" + ext + "' (supported: .off .obj .ply .stl)");
+  check_mesh_format(path, who);
   if (std::filesystem::is_directory(path))
     throw InvalidInput(who + ": " + path + " is a folder, not a mesh file");
   const std::string text = read_file(path, who.c_str());
@@ -485,6 +484,12 @@ std::string file_extension(const std::string& path) {
   return ext;
 }
 
+void check_mesh_format(const std::string& path, const std::string& who) {
+  const std::string ext = file_extension(path);
+  if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
+    throw InvalidInput(who + ": " + path + ": unknown format '" + ext + "' (supported: .off .obj .ply .stl)");
+}
+
 TriangleSoup load_soup(const std::string& path, LoadReport* report) {
   LoadReport local;
   LoadReport& r = report ? *report : local;
@@ -530,8 +535,7 @@ Mesh load_mesh(const std::string& path, LoadReport* report) {
 
 void save_mesh(const Positions& P, const Faces& F, const std::string& path, const SaveOptions& options) {
   const std::string ext = file_extension(path);
-  if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
-    throw InvalidInput("save_mesh: " + path + ": unknown format '" + ext + "' (supported: .off .obj .ply .stl)");
+  check_mesh_format(path, "save_mesh");
   if (!P.allFinite()) throw InvalidInput("save_mesh: " + path + ": positions contain NaN or inf; nothing written");
   if (options.vertex_scalar) {
     if (ext != ".ply") throw InvalidInput("save_mesh: " + path + ": per-vertex scalars need the .ply format");

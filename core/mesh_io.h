@@ -59,4 +59,8 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
 //! Lower-case extension of path including the dot ("" if none).
 std::string file_extension(const std::string& path);
 
+//! Checks that path has a mesh format msdeform reads and writes (.off .obj .ply .stl); `who` prefixes the
+//! message. \throw InvalidInput naming the path and the extension.
+void check_mesh_format(const std::string& path, const std::string& who);
+
 }  // namespace msd

@@ -207,9 +207,8 @@ void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& r
   Eigen::MatrixXd data = Eigen::MatrixXd::Zero(nc, cols);
   for (int c = 0; c < nc; ++c)
     if (handle_of_[c] >= 0) data.row(c).segment<4>(4 * handle_of_[c]) << P.row(constrained_[c]) - origin_.transpose(), 1.0;
-  Eigen::MatrixXd G;
-  solve(data, G);
-  handle_coefficients_ = G;
+  solve(data, handle_coefficients_);
+  const Eigen::MatrixXd& G = handle_coefficients_;
 
   // b = Ψ(P) G at every point.
   point_basis_.setZero(n, cols);

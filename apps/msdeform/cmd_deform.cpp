@@ -25,9 +25,7 @@ bool same_file(const std::string& a, const std::string& b) {
 }
 // Refuses an output with an unknown format or naming one of the inputs (which it would replace).
 void check_output(const std::string& path, const char* option, const std::vector<std::string>& inputs) {
-  const std::string ext = file_extension(path);
-  if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
-    throw InvalidInput(std::string(option) + " " + path + ": unknown format '" + ext + "' (supported: .off .obj .ply .stl)");
+  check_mesh_format(path, option);
   for (const std::string& input : inputs)
     if (!input.empty() && same_file(path, input))
       throw InvalidInput(std::string(option) + " " + path + " is one of the inputs; it would be replaced. Write elsewhere");

@@ -12,6 +12,7 @@
 #include "core/errors.h"
 #include "core/parallel.h"
 #include "core/solver.h"
+#include "core/subdivision.h"
 
 namespace msd {
 
@@ -689,30 +690,17 @@ void kdop_cage_near_origin(const Positions& P, double margin, int subdivisions, 
           tris.push_back({c, loop[i], loop[(i + 1) % k]});
     }
   }
-  // Midpoint subdivision: every triangle into four; the cage keeps its shape, with more control vertices.
-  for (int level = 0; level < subdivisions; ++level) {
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      const auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      verts.push_back(0.5 * (verts[a] + verts[b]));
-      return mid[key] = static_cast<int>(verts.size()) - 1;
-    };
-    std::vector<Eigen::Vector3i> finer;
-    for (const auto& t : tris) {
-      const int ab = midpoint(t[0], t[1]), bc = midpoint(t[1], t[2]), ca = midpoint(t[2], t[0]);
-      finer.push_back({t[0], ab, ca});
-      finer.push_back({t[1], bc, ab});
-      finer.push_back({t[2], ca, bc});
-      finer.push_back({ab, bc, ca});
-    }
-    tris.swap(finer);
-  }
   cage_P.resize(static_cast<Eigen::Index>(verts.size()), 3);
   for (size_t i = 0; i < verts.size(); ++i) cage_P.row(i) = verts[i].transpose();
   cage_F.resize(static_cast<Eigen::Index>(tris.size()), 3);
   for (size_t i = 0; i < tris.size(); ++i) cage_F.row(i) = tris[i].transpose();
+  // Midpoint subdivision (core/subdivision.h's linear refinement): every triangle into four, the cage
+  // keeps its shape with more control vertices.
+  if (subdivisions > 0) {
+    const LoopRefinement refined = loop_refine(cage_F, static_cast<int>(cage_P.rows()), subdivisions);
+    cage_P = refined.linear * cage_P;
+    cage_F = refined.faces;
+  }
 
   double volume = 0;
   const std::string problem = cage_problem(cage_P, cage_F, &volume);

@@ -1,16 +1,16 @@
-#include "analysis/metrics.h"
+#include "msdeform/analysis/metrics.h"
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <utility>
 
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/parallel.h"
-#include "core/rotation.h"
-#include "detail/normal_displacements.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/rotation.h"
+#include "msdeform/detail/normal_displacements.h"
 
 namespace msd {
 namespace {

@@ -9,10 +9,10 @@
 #include <optional>
 #include <vector>
 
-#include "core/adjacency.h"
-#include "core/region.h"
-#include "core/types.h"
-#include "decomposition/fairing.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/types.h"
+#include "msdeform/decomposition/fairing.h"
 
 namespace msd {
 

@@ -1,4 +1,4 @@
-#include "analysis/render.h"
+#include "msdeform/analysis/render.h"
 
 #include <embree3/rtcore.h>
 #include <stb/stb_image_write.h>  // declarations only: libstb holds the implementation
@@ -10,13 +10,13 @@
 #include <string>
 #include <tuple>
 
-#include "core/atomic_file.h"
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/mesh.h"
-#include "core/parallel.h"
-#include "core/surface_check.h"
+#include "msdeform/core/atomic_file.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/surface_check.h"
 
 namespace msd {
 namespace {

@@ -6,7 +6,7 @@
 #define CGAL_LINKED_WITH_TBB
 #endif
 
-#include "analysis/self_intersections.h"
+#include "msdeform/analysis/self_intersections.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
@@ -16,9 +16,9 @@
 #include <iterator>
 #include <string>
 
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/laplacian.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
 
 namespace msd {
 namespace {

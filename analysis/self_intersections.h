@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/types.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

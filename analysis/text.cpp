@@ -3,7 +3,7 @@
 
 #include <algorithm>
 
-#include "analysis/render.h"
+#include "msdeform/analysis/render.h"
 
 namespace msd {
 namespace {

@@ -8,10 +8,10 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "analysis/metrics.h"
-#include "analysis/render.h"
-#include "analysis/self_intersections.h"
-#include "core/scenes.h"
+#include "msdeform/analysis/metrics.h"
+#include "msdeform/analysis/render.h"
+#include "msdeform/analysis/self_intersections.h"
+#include "msdeform/core/scenes.h"
 
 using namespace msd::bench;
 

@@ -8,10 +8,10 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "core/memory.h"
-#include "core/parallel.h"
-#include "core/scenes.h"
-#include "deformation/cage.h"
+#include "msdeform/core/memory.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/deformation/cage.h"
 
 using namespace msd::bench;
 

@@ -10,11 +10,11 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "core/scenes.h"
-#include "core/solver.h"
-#include "decomposition/fairing.h"
-#include "decomposition/low_pass.h"
-#include "decomposition/subdivision_hierarchy.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/core/solver.h"
+#include "msdeform/decomposition/fairing.h"
+#include "msdeform/decomposition/low_pass.h"
+#include "msdeform/decomposition/subdivision_hierarchy.h"
 
 using namespace msd::bench;
 

@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "core/mesh.h"
-#include "core/scenes.h"
-#include "detail/closest_point.h"
-#include "detail/normal_displacements.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/detail/closest_point.h"
+#include "msdeform/detail/normal_displacements.h"
 
 using namespace msd::bench;
 

@@ -15,11 +15,11 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "core/scenes.h"
-#include "core/solver.h"
-#include "detail/deformation_transfer.h"
-#include "detail/displacement_volumes.h"
-#include "detail/normal_displacements.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/core/solver.h"
+#include "msdeform/detail/deformation_transfer.h"
+#include "msdeform/detail/displacement_volumes.h"
+#include "msdeform/detail/normal_displacements.h"
 
 using namespace msd::bench;
 

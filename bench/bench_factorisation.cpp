@@ -6,10 +6,10 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "core/memory.h"
-#include "core/laplacian.h"
-#include "core/scenes.h"
-#include "core/solver.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/memory.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/core/solver.h"
 
 using namespace msd::bench;
 

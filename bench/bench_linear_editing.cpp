@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "core/memory.h"
-#include "core/scenes.h"
-#include "deformation/gradient_editing.h"
-#include "deformation/laplacian_editing.h"
+#include "msdeform/core/memory.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/deformation/gradient_editing.h"
+#include "msdeform/deformation/laplacian_editing.h"
 
 using namespace msd::bench;
 

@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "core/memory.h"
-#include "core/scenes.h"
-#include "reconstruction/multiscale.h"
+#include "msdeform/core/memory.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/reconstruction/multiscale.h"
 
 using namespace msd::bench;
 

@@ -21,13 +21,13 @@
 #include <string>
 #include <vector>
 
-#include "analysis/metrics.h"
-#include "analysis/self_intersections.h"
 #include "bench/bench_common.h"
-#include "core/edit_case.h"
-#include "core/memory.h"
-#include "core/scenes.h"
-#include "deformation/primo.h"
+#include "msdeform/analysis/metrics.h"
+#include "msdeform/analysis/self_intersections.h"
+#include "msdeform/core/edit_case.h"
+#include "msdeform/core/memory.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/deformation/primo.h"
 
 using namespace msd::bench;
 

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "core/scenes.h"
-#include "core/solver.h"
-#include "deformation/propagation.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/core/solver.h"
+#include "msdeform/deformation/propagation.h"
 
 using namespace msd::bench;
 

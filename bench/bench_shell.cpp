@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "core/memory.h"
-#include "core/scenes.h"
-#include "deformation/shell.h"
+#include "msdeform/core/memory.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/deformation/shell.h"
 
 using namespace msd::bench;
 

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "bench/bench_common.h"
-#include "core/scenes.h"
-#include "deformation/lattice.h"
-#include "deformation/rbf.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/deformation/lattice.h"
+#include "msdeform/deformation/rbf.h"
 
 using namespace msd;
 using namespace msd::bench;

@@ -15,19 +15,19 @@
 #include <string>
 #include <vector>
 
-#include "analysis/metrics.h"
-#include "analysis/self_intersections.h"
 #include "bench/bench_common.h"
-#include "core/memory.h"
-#include "core/mesh.h"
-#include "core/mesh_io.h"
-#include "core/region.h"
-#include "core/scenes.h"
-#include "decomposition/fairing.h"
-#include "decomposition/smoothing.h"
-#include "deformation/shell.h"
-#include "detail/displacement_volumes.h"
-#include "detail/normal_displacements.h"
+#include "msdeform/analysis/metrics.h"
+#include "msdeform/analysis/self_intersections.h"
+#include "msdeform/core/memory.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/decomposition/fairing.h"
+#include "msdeform/decomposition/smoothing.h"
+#include "msdeform/deformation/shell.h"
+#include "msdeform/detail/displacement_volumes.h"
+#include "msdeform/detail/normal_displacements.h"
 
 using namespace msd::bench;
 

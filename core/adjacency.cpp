@@ -1,4 +1,4 @@
-#include "core/adjacency.h"
+#include "msdeform/core/adjacency.h"
 
 #include <algorithm>
 #include <cstdint>

@@ -1,4 +1,4 @@
-#include "core/atomic_file.h"
+#include "msdeform/core/atomic_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -11,7 +11,7 @@
 #include <sstream>
 #include <vector>
 
-#include "core/errors.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 

@@ -1,8 +1,8 @@
-#include "core/checks.h"
+#include "msdeform/core/checks.h"
 
 #include <string>
 
-#include "core/errors.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 

@@ -2,7 +2,7 @@
 //! \file The input checks of bulk arrays, one definition for every module: each names what is wrong and
 //! where (vertex or face id), so no method has to repeat them.
 
-#include "core/types.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

@@ -6,9 +6,9 @@
 #include <utility>
 #include <vector>
 
-#include "core/adjacency.h"
-#include "core/region.h"
-#include "core/types.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

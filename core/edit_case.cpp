@@ -1,11 +1,11 @@
-#include "core/edit_case.h"
+#include "msdeform/core/edit_case.h"
 
 #include <filesystem>
 
-#include "core/errors.h"
-#include "core/mesh_io.h"
-#include "core/scenes.h"
-#include "core/surface_check.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/core/surface_check.h"
 
 namespace msd {
 

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "core/region.h"
-#include "core/subdivision.h"
-#include "core/types.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/subdivision.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

@@ -1,4 +1,4 @@
-#include "core/geodesics.h"
+#include "msdeform/core/geodesics.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,10 +9,10 @@
 #include <string>
 #include <utility>
 
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/parallel.h"
-#include "core/solver.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/solver.h"
 
 namespace msd {
 namespace {

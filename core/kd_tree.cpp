@@ -1,4 +1,4 @@
-#include "core/kd_tree.h"
+#include "msdeform/core/kd_tree.h"
 
 #include <algorithm>
 #include <array>

@@ -1,11 +1,11 @@
-#include "core/laplacian.h"
+#include "msdeform/core/laplacian.h"
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
-#include "core/errors.h"
-#include "core/parallel.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/parallel.h"
 
 namespace msd {
 namespace {

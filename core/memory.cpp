@@ -1,4 +1,4 @@
-#include "core/memory.h"
+#include "msdeform/core/memory.h"
 
 #include <malloc.h>
 

@@ -1,10 +1,10 @@
-#include "core/mesh.h"
+#include "msdeform/core/mesh.h"
 
 #include <cmath>
 #include <string>
 
-#include "core/errors.h"
-#include "core/parallel.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/parallel.h"
 
 namespace msd {
 

@@ -5,8 +5,8 @@
 
 #include <vector>
 
-#include "core/checks.h"
-#include "core/types.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

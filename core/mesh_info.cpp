@@ -1,12 +1,12 @@
-#include "core/mesh_info.h"
+#include "msdeform/core/mesh_info.h"
 
 #include <algorithm>
 #include <cstdint>
 #include <numeric>
 #include <vector>
 
-#include "core/laplacian.h"
-#include "core/surface_check.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/surface_check.h"
 
 namespace msd {
 

@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "core/mesh.h"
+#include "msdeform/core/mesh.h"
 
 namespace msd {
 

@@ -1,4 +1,4 @@
-#include "core/mesh_io.h"
+#include "msdeform/core/mesh_io.h"
 
 #include <OpenMesh/Core/System/omstream.hh>
 
@@ -14,9 +14,9 @@
 #include <unordered_map>
 #include <vector>
 
-#include "core/atomic_file.h"
-#include "core/errors.h"
-#include "core/surface_check.h"
+#include "msdeform/core/atomic_file.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/surface_check.h"
 
 namespace msd {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "core/mesh.h"
+#include "msdeform/core/mesh.h"
 
 namespace msd {
 

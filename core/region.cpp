@@ -1,13 +1,13 @@
-#include "core/region.h"
+#include "msdeform/core/region.h"
 
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <sstream>
 
-#include "core/adjacency.h"
-#include "core/atomic_file.h"
-#include "core/errors.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/atomic_file.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 

@@ -1,4 +1,4 @@
-#include "core/rotation.h"
+#include "msdeform/core/rotation.h"
 
 #include <Eigen/SVD>
 

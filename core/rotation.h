@@ -3,7 +3,7 @@
 //! cross-covariance (Kabsch / orthogonal Procrustes, the local step of ARAP) and the polar decomposition
 //! of a linear map with a proper rotation factor.
 
-#include "core/types.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

@@ -1,4 +1,4 @@
-#include "core/scenes.h"
+#include "msdeform/core/scenes.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,8 @@
 
 #include <Eigen/Geometry>
 
-#include "core/errors.h"
-#include "core/mesh_io.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
 
 namespace msd {
 namespace {

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "core/region.h"
-#include "core/subdivision.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/subdivision.h"
 
 namespace msd {
 

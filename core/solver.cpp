@@ -1,11 +1,11 @@
-#include "core/solver.h"
+#include "msdeform/core/solver.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cstring>
 
-#include "core/errors.h"
-#include "core/laplacian.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
 
 #ifdef MSD_HAVE_CHOLMOD
 #include <cholmod.h>

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "core/types.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

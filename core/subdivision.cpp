@@ -1,4 +1,4 @@
-#include "core/subdivision.h"
+#include "msdeform/core/subdivision.h"
 
 #include <memory>
 #include <vector>
@@ -8,7 +8,7 @@
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
-#include "core/errors.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 namespace {

@@ -1,7 +1,7 @@
 #pragma once
 //! \file Uniform Loop refinement of triangle meshes (OpenSubdiv Far), as sparse stencil matrices.
 
-#include "core/types.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

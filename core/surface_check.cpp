@@ -1,10 +1,10 @@
-#include "core/surface_check.h"
+#include "msdeform/core/surface_check.h"
 
 #include <algorithm>
 #include <array>
 #include <numeric>
 
-#include "core/errors.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 namespace {

@@ -5,6 +5,13 @@
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
 
+// msdeform's libraries are built with Eigen's alignment pinned to 16 bytes and Eigen's own aligned
+// allocation (core/CMakeLists.txt): types in these headers must have the same layout, and heap blocks the
+// same allocator, in the library and in the code that uses it, whatever either's instruction set.
+static_assert(EIGEN_MAX_ALIGN_BYTES == 16 && EIGEN_MALLOC_ALREADY_ALIGNED == 0,
+              "msdeform: compile with EIGEN_MAX_ALIGN_BYTES=16 and EIGEN_MALLOC_ALREADY_ALIGNED=0, as msdeform's "
+              "libraries are (the msdeform:: CMake targets add both; define them before any Eigen header)");
+
 namespace msd {
 
 using Vec3 = Eigen::Vector3d;

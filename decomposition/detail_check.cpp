@@ -1,15 +1,15 @@
-#include "decomposition/detail_check.h"
+#include "msdeform/decomposition/detail_check.h"
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
 
-#include "core/adjacency.h"
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/mesh.h"
-#include "core/laplacian.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/mesh.h"
 
 namespace msd {
 

@@ -6,7 +6,7 @@
 
 #include <limits>
 
-#include "core/types.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

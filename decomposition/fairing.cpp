@@ -1,12 +1,11 @@
-#include "decomposition/fairing.h"
+#include "msdeform/decomposition/fairing.h"
 
 #include <algorithm>
 #include <string>
 
-#include "core/checks.h"
-#include "core/adjacency.h"
-#include "core/checks.h"
-#include "core/errors.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 namespace {

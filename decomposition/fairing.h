@@ -6,9 +6,9 @@
 
 #include <vector>
 
-#include "core/region.h"
-#include "core/solver.h"
-#include "core/laplacian.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/solver.h"
 
 namespace msd {
 

@@ -1,11 +1,11 @@
-#include "decomposition/hierarchy.h"
+#include "msdeform/decomposition/hierarchy.h"
 
 #include <cmath>
 #include <string>
 
-#include "core/adjacency.h"
-#include "core/checks.h"
-#include "core/errors.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 namespace {

@@ -11,10 +11,10 @@
 
 #include <vector>
 
-#include "core/types.h"
-#include "core/region.h"
-#include "decomposition/fairing.h"
-#include "decomposition/smoothing.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/types.h"
+#include "msdeform/decomposition/fairing.h"
+#include "msdeform/decomposition/smoothing.h"
 
 namespace msd {
 

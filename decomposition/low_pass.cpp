@@ -1,15 +1,14 @@
-#include "decomposition/low_pass.h"
+#include "msdeform/decomposition/low_pass.h"
 
 #include <chrono>
 #include <cmath>
 #include <string>
 
-#include "core/adjacency.h"
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/solver.h"
-#include "core/laplacian.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/solver.h"
 
 namespace msd {
 namespace {

@@ -20,8 +20,8 @@
 
 #include <vector>
 
-#include "core/types.h"
-#include "decomposition/detail_check.h"
+#include "msdeform/core/types.h"
+#include "msdeform/decomposition/detail_check.h"
 
 namespace msd {
 

@@ -1,6 +1,6 @@
 // The one translation unit of decomposition/ that includes CGAL (about 1 GB of compiler memory).
 
-#include "decomposition/remesh.h"
+#include "msdeform/decomposition/remesh.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "core/checks.h"
-#include "core/errors.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 namespace {

@@ -3,7 +3,7 @@
 //! seed 9.3.2: a remeshed base surface makes the normal-displacement search and the base deformation
 //! numerically more robust). A thin wrapper over CGAL::Polygon_mesh_processing::isotropic_remeshing.
 
-#include "core/types.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

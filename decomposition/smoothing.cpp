@@ -1,15 +1,15 @@
-#include "decomposition/smoothing.h"
+#include "msdeform/decomposition/smoothing.h"
 
 #include <cmath>
 #include <string>
 #include <vector>
 
-#include "core/adjacency.h"
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/mesh.h"
-#include "core/solver.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/solver.h"
 
 namespace msd {
 namespace {

@@ -5,8 +5,8 @@
 //! with Δ = M⁻¹W (symmetric W, diagonal mass M). The matrix is symmetric positive definite for t > 0, so
 //! any time step is stable; features smaller than about √t are damped most.
 
-#include "core/types.h"
-#include "core/laplacian.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

@@ -1,14 +1,14 @@
-#include "decomposition/subdivision_hierarchy.h"
+#include "msdeform/decomposition/subdivision_hierarchy.h"
 
 #include <cstring>
 #include <string>
 #include <unordered_map>
 
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/parallel.h"
-#include "core/solver.h"
-#include "core/laplacian.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/solver.h"
 
 namespace msd {
 namespace {

@@ -8,8 +8,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/region.h"
-#include "core/subdivision.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/subdivision.h"
 
 namespace msd {
 

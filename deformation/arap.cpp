@@ -1,4 +1,4 @@
-#include "deformation/arap.h"
+#include "msdeform/deformation/arap.h"
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -6,11 +6,11 @@
 #include <cmath>
 #include <limits>
 
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/mesh.h"
-#include "core/parallel.h"
-#include "core/rotation.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/rotation.h"
 
 namespace msd {
 namespace {

@@ -7,8 +7,8 @@
 
 #include <vector>
 
-#include "core/solver.h"
-#include "deformation/deformer.h"
+#include "msdeform/core/solver.h"
+#include "msdeform/deformation/deformer.h"
 
 namespace msd {
 

@@ -1,4 +1,4 @@
-#include "deformation/cage.h"
+#include "msdeform/deformation/cage.h"
 
 #include <algorithm>
 #include <atomic>
@@ -8,11 +8,11 @@
 #include <numeric>
 #include <utility>
 
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/parallel.h"
-#include "core/solver.h"
-#include "core/subdivision.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/solver.h"
+#include "msdeform/core/subdivision.h"
 
 namespace msd {
 

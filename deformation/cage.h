@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "core/types.h"
-#include "deformation/space_deformer.h"
+#include "msdeform/core/types.h"
+#include "msdeform/deformation/space_deformer.h"
 
 namespace msd {
 

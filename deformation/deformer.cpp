@@ -1,9 +1,9 @@
-#include "deformation/deformer.h"
+#include "msdeform/deformation/deformer.h"
 
 #include <cmath>
 
-#include "core/checks.h"
-#include "core/errors.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 

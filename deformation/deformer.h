@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "core/mesh.h"
-#include "core/region.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/region.h"
 
 namespace msd {
 

@@ -1,8 +1,8 @@
-#include "deformation/gradient_editing.h"
+#include "msdeform/deformation/gradient_editing.h"
 
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/parallel.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/parallel.h"
 
 namespace msd {
 

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "core/solver.h"
-#include "deformation/deformer.h"
-#include "deformation/local_transforms.h"
+#include "msdeform/core/solver.h"
+#include "msdeform/deformation/deformer.h"
+#include "msdeform/deformation/local_transforms.h"
 
 namespace msd {
 

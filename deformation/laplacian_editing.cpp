@@ -1,14 +1,14 @@
-#include "deformation/laplacian_editing.h"
+#include "msdeform/deformation/laplacian_editing.h"
 
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 
-#include "core/adjacency.h"
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/parallel.h"
-#include "deformation/propagation.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/deformation/propagation.h"
 
 namespace msd {
 

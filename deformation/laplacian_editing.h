@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "core/edge_scale.h"
-#include "core/solver.h"
-#include "deformation/deformer.h"
-#include "deformation/local_transforms.h"
+#include "msdeform/core/edge_scale.h"
+#include "msdeform/core/solver.h"
+#include "msdeform/deformation/deformer.h"
+#include "msdeform/deformation/local_transforms.h"
 
 namespace msd {
 

@@ -1,9 +1,9 @@
-#include "deformation/lattice.h"
+#include "msdeform/deformation/lattice.h"
 
 #include <algorithm>
 #include <cmath>
 
-#include "core/errors.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 

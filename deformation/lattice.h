@@ -6,7 +6,7 @@
 //! solve (9.13) in the least-squares, least-norm sense (SpaceDeformer's solve, with an affine part by
 //! default, LeastNormOptions).
 
-#include "deformation/space_deformer.h"
+#include "msdeform/deformation/space_deformer.h"
 
 namespace msd {
 

@@ -1,10 +1,10 @@
-#include "deformation/local_transforms.h"
+#include "msdeform/deformation/local_transforms.h"
 
 #include <cmath>
 
-#include "core/errors.h"
-#include "core/parallel.h"
-#include "core/rotation.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/rotation.h"
 
 namespace msd {
 

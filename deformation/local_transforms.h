@@ -6,9 +6,9 @@
 
 #include <vector>
 
-#include "core/region.h"
-#include "core/solver.h"
-#include "core/types.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/solver.h"
+#include "msdeform/core/types.h"
 
 namespace msd {
 

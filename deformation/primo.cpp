@@ -1,14 +1,14 @@
-#include "deformation/primo.h"
+#include "msdeform/deformation/primo.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <utility>
 
-#include "core/errors.h"
-#include "core/mesh.h"
-#include "core/parallel.h"
-#include "core/rotation.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/rotation.h"
 
 namespace msd {
 

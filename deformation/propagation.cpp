@@ -1,16 +1,16 @@
-#include "deformation/propagation.h"
+#include "msdeform/deformation/propagation.h"
 
 #include <algorithm>
 #include <cmath>
 #include <utility>
 
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/kd_tree.h"
-#include "core/laplacian.h"
-#include "core/parallel.h"
-#include "core/rotation.h"
-#include "core/solver.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/kd_tree.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/rotation.h"
+#include "msdeform/core/solver.h"
 
 namespace msd {
 namespace {

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "core/geodesics.h"
-#include "deformation/deformer.h"
+#include "msdeform/core/geodesics.h"
+#include "msdeform/deformation/deformer.h"
 
 namespace msd {
 

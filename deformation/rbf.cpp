@@ -1,4 +1,4 @@
-#include "deformation/rbf.h"
+#include "msdeform/deformation/rbf.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -7,9 +7,9 @@
 #include <cstdio>
 #include <limits>
 
-#include "core/errors.h"
-#include "core/mesh.h"
-#include "core/parallel.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/parallel.h"
 
 namespace msd {
 

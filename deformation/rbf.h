@@ -7,7 +7,7 @@
 //! (9.15) with its polynomial block is factored once; affine handle frames then use the precomputed
 //! affine basis functions of SpaceDeformer (one 3×4 by 4 product per point and handle, no solve).
 
-#include "deformation/space_deformer.h"
+#include "msdeform/deformation/space_deformer.h"
 
 namespace msd {
 

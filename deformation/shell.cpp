@@ -1,10 +1,10 @@
-#include "deformation/shell.h"
+#include "msdeform/deformation/shell.h"
 
 #include <cmath>
 
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/parallel.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/parallel.h"
 
 namespace msd {
 

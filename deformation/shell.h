@@ -3,8 +3,8 @@
 //! displacement, i.e. solve −ks·Δd + kb·Δ²d = 0 (9.5) on the free vertices with the handle and fixed
 //! displacements as boundary conditions (9.6, 9.7).
 
-#include "core/solver.h"
-#include "deformation/deformer.h"
+#include "msdeform/core/solver.h"
+#include "msdeform/deformation/deformer.h"
 
 namespace msd {
 

@@ -1,4 +1,4 @@
-#include "deformation/space_deformer.h"
+#include "msdeform/deformation/space_deformer.h"
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -7,11 +7,11 @@
 #include <cstdio>
 #include <numeric>
 
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/mesh.h"
-#include "core/parallel.h"
-#include "core/solver.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/solver.h"
 
 namespace msd {
 namespace {

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "deformation/deformer.h"
+#include "msdeform/deformation/deformer.h"
 
 namespace msd {
 

@@ -1,4 +1,4 @@
-#include "detail/closest_point.h"
+#include "msdeform/detail/closest_point.h"
 
 #include <embree3/rtcore.h>
 
@@ -7,9 +7,9 @@
 #include <cmath>
 #include <string>
 
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/parallel.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/parallel.h"
 
 namespace msd {
 namespace {

@@ -1,4 +1,4 @@
-#include "detail/deformation_transfer.h"
+#include "msdeform/detail/deformation_transfer.h"
 
 #include <algorithm>
 #include <chrono>
@@ -9,10 +9,10 @@
 #include <numeric>
 #include <string>
 
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/parallel.h"
-#include "detail/phong.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/detail/phong.h"
 
 namespace msd {
 namespace {

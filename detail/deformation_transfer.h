@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "core/solver.h"
-#include "core/types.h"
-#include "detail/encoding.h"
-#include "detail/normal_displacements.h"
+#include "msdeform/core/solver.h"
+#include "msdeform/core/types.h"
+#include "msdeform/detail/encoding.h"
+#include "msdeform/detail/normal_displacements.h"
 
 namespace msd {
 

@@ -1,12 +1,12 @@
-#include "detail/displacement_vectors.h"
+#include "msdeform/detail/displacement_vectors.h"
 
 #include <algorithm>
 #include <atomic>
 #include <string>
 
-#include "core/errors.h"
-#include "core/mesh.h"
-#include "core/parallel.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/parallel.h"
 
 namespace msd {
 namespace {

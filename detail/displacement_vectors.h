@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "core/types.h"
-#include "detail/encoding.h"
+#include "msdeform/core/types.h"
+#include "msdeform/detail/encoding.h"
 
 namespace msd {
 

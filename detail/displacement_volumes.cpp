@@ -1,4 +1,4 @@
-#include "detail/displacement_volumes.h"
+#include "msdeform/detail/displacement_volumes.h"
 
 #include <algorithm>
 #include <chrono>
@@ -7,9 +7,9 @@
 #include <mutex>
 #include <string>
 
-#include "core/errors.h"
-#include "core/parallel.h"
-#include "detail/phong.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/detail/phong.h"
 
 namespace msd {
 namespace {

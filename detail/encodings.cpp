@@ -1,7 +1,7 @@
-#include "detail/encodings.h"
+#include "msdeform/detail/encodings.h"
 
-#include "core/errors.h"
-#include "detail/deformation_transfer.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/detail/deformation_transfer.h"
 
 namespace msd {
 

@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "detail/displacement_vectors.h"
-#include "detail/displacement_volumes.h"
-#include "detail/encoding.h"
-#include "detail/normal_displacements.h"
+#include "msdeform/detail/displacement_vectors.h"
+#include "msdeform/detail/displacement_volumes.h"
+#include "msdeform/detail/encoding.h"
+#include "msdeform/detail/normal_displacements.h"
 
 namespace msd {
 

@@ -1,13 +1,13 @@
-#include "detail/fold_check.h"
+#include "msdeform/detail/fold_check.h"
 
 #include <atomic>
 #include <memory>
 #include <string>
 
-#include "core/errors.h"
-#include "core/mesh.h"
-#include "core/parallel.h"
-#include "detail/closest_point.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/detail/closest_point.h"
 
 namespace msd {
 namespace {

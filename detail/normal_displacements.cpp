@@ -1,16 +1,16 @@
-#include "detail/normal_displacements.h"
+#include "msdeform/detail/normal_displacements.h"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <string>
 
-#include "core/errors.h"
-#include "core/parallel.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/parallel.h"
 #include <limits>
 
-#include "detail/closest_point.h"
-#include "detail/phong.h"
+#include "msdeform/detail/closest_point.h"
+#include "msdeform/detail/phong.h"
 
 namespace msd {
 namespace {

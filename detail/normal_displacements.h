@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "core/mesh.h"
-#include "core/types.h"
-#include "detail/encoding.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/types.h"
+#include "msdeform/detail/encoding.h"
 
 namespace msd {
 

@@ -1,7 +1,7 @@
 #pragma once
 //! \file Points and Phong normals interpolated over base triangles: shared by the detail encodings.
 
-#include "core/types.h"
+#include "msdeform/core/types.h"
 
 namespace msd::phong {
 

@@ -1,8 +1,8 @@
-#include "reconstruction/catalogue.h"
+#include "msdeform/reconstruction/catalogue.h"
 
 #include <tuple>
 
-#include "core/errors.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 

@@ -9,17 +9,17 @@
 #include <string>
 #include <vector>
 
-#include "deformation/arap.h"
-#include "deformation/cage.h"
-#include "deformation/deformer.h"
-#include "deformation/gradient_editing.h"
-#include "deformation/laplacian_editing.h"
-#include "deformation/lattice.h"
-#include "deformation/primo.h"
-#include "deformation/propagation.h"
-#include "deformation/rbf.h"
-#include "deformation/shell.h"
-#include "reconstruction/multiscale.h"
+#include "msdeform/deformation/arap.h"
+#include "msdeform/deformation/cage.h"
+#include "msdeform/deformation/deformer.h"
+#include "msdeform/deformation/gradient_editing.h"
+#include "msdeform/deformation/laplacian_editing.h"
+#include "msdeform/deformation/lattice.h"
+#include "msdeform/deformation/primo.h"
+#include "msdeform/deformation/propagation.h"
+#include "msdeform/deformation/rbf.h"
+#include "msdeform/deformation/shell.h"
+#include "msdeform/reconstruction/multiscale.h"
 
 namespace msd {
 

@@ -1,15 +1,15 @@
-#include "reconstruction/decompose.h"
+#include "msdeform/reconstruction/decompose.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/mesh.h"
-#include "core/laplacian.h"
-#include "decomposition/remesh.h"
-#include "detail/closest_point.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/decomposition/remesh.h"
+#include "msdeform/detail/closest_point.h"
 
 namespace msd {
 

@@ -6,12 +6,12 @@
 #include <memory>
 #include <string>
 
-#include "core/region.h"
-#include "core/subdivision.h"
-#include "decomposition/detail_check.h"
-#include "decomposition/fairing.h"
-#include "decomposition/low_pass.h"
-#include "decomposition/subdivision_hierarchy.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/subdivision.h"
+#include "msdeform/decomposition/detail_check.h"
+#include "msdeform/decomposition/fairing.h"
+#include "msdeform/decomposition/low_pass.h"
+#include "msdeform/decomposition/subdivision_hierarchy.h"
 
 namespace msd {
 

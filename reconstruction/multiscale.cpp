@@ -1,9 +1,9 @@
-#include "reconstruction/multiscale.h"
+#include "msdeform/reconstruction/multiscale.h"
 
 #include <algorithm>
 
-#include "core/errors.h"
-#include "deformation/shell.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/deformation/shell.h"
 
 namespace msd {
 

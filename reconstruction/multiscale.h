@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "deformation/deformer.h"
-#include "detail/encodings.h"
-#include "detail/fold_check.h"
-#include "reconstruction/decompose.h"
+#include "msdeform/deformation/deformer.h"
+#include "msdeform/detail/encodings.h"
+#include "msdeform/detail/fold_check.h"
+#include "msdeform/reconstruction/decompose.h"
 
 namespace msd {
 

@@ -11,9 +11,9 @@
 
 #include <catch2/catch.hpp>
 
-#include "core/mesh.h"
-#include "core/region.h"
-#include "core/scenes.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/scenes.h"
 
 namespace msd::test {
 

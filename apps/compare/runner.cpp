@@ -6,8 +6,8 @@
 #include <exception>
 #include <optional>
 
-#include "analysis/self_intersections.h"
-#include "core/errors.h"
+#include "msdeform/analysis/self_intersections.h"
+#include "msdeform/core/errors.h"
 
 namespace msd {
 namespace {

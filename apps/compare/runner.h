@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/metrics.h"
-#include "core/edit_case.h"
-#include "reconstruction/catalogue.h"
+#include "msdeform/analysis/metrics.h"
+#include "msdeform/core/edit_case.h"
+#include "msdeform/reconstruction/catalogue.h"
 
 namespace msd {
 

@@ -7,15 +7,15 @@
 #include <sstream>
 
 #include "apps/compare/runner.h"
-#include "analysis/render.h"
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/deformers.h"
 #include "apps/msdeform/edit_case.h"
-#include "core/atomic_file.h"
-#include "core/edit_case.h"
-#include "core/errors.h"
-#include "core/mesh_io.h"
-#include "core/scenes.h"
+#include "msdeform/analysis/render.h"
+#include "msdeform/core/atomic_file.h"
+#include "msdeform/core/edit_case.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/scenes.h"
 
 namespace msd::cli {
 

@@ -5,10 +5,10 @@
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/deformers.h"
 #include "apps/msdeform/edit_case.h"
-#include "core/errors.h"
-#include "core/mesh_io.h"
-#include "detail/normal_displacements.h"
-#include "reconstruction/decompose.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/detail/normal_displacements.h"
+#include "msdeform/reconstruction/decompose.h"
 
 namespace msd::cli {
 

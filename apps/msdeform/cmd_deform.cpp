@@ -6,11 +6,11 @@
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/deformers.h"
 #include "apps/msdeform/edit_case.h"
-#include "core/errors.h"
-#include "analysis/metrics.h"
-#include "core/mesh_io.h"
-#include "deformation/space_deformer.h"
-#include "reconstruction/multiscale.h"
+#include "msdeform/analysis/metrics.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/deformation/space_deformer.h"
+#include "msdeform/reconstruction/multiscale.h"
 
 namespace msd::cli {
 

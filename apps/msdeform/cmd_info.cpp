@@ -2,9 +2,9 @@
 #include <memory>
 
 #include "apps/msdeform/commands.h"
-#include "core/mesh_info.h"
-#include "core/mesh_io.h"
-#include "core/scenes.h"
+#include "msdeform/core/mesh_info.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/scenes.h"
 
 namespace msd::cli {
 

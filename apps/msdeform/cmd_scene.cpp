@@ -2,7 +2,7 @@
 #include <memory>
 
 #include "apps/msdeform/commands.h"
-#include "core/scenes.h"
+#include "msdeform/core/scenes.h"
 
 namespace msd::cli {
 

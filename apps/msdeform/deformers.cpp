@@ -6,8 +6,8 @@
 #include <map>
 #include <sstream>
 
-#include "core/errors.h"
-#include "core/mesh_io.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
 
 namespace msd::cli {
 

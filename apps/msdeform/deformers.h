@@ -8,8 +8,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "core/edit_case.h"
-#include "reconstruction/catalogue.h"
+#include "msdeform/core/edit_case.h"
+#include "msdeform/reconstruction/catalogue.h"
 
 namespace msd::cli {
 

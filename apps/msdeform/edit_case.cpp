@@ -1,7 +1,7 @@
 #include "apps/msdeform/edit_case.h"
 
-#include "core/errors.h"
-#include "core/scenes.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/scenes.h"
 
 namespace msd::cli {
 

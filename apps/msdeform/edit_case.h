@@ -5,7 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "core/edit_case.h"
+#include "msdeform/core/edit_case.h"
 
 namespace msd::cli {
 

@@ -2,14 +2,19 @@
 #include <iostream>
 
 #include "apps/msdeform/commands.h"
-#include "core/memory.h"
-#include "core/errors.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/memory.h"
+#include "msdeform/core/version.h"
 
 int main(int argc, char** argv) {
   msd::retain_freed_memory();
   CLI::App app{"msdeform: multi-scale, detail-preserving deformation of triangle meshes"};
   app.require_subcommand(1);
   app.set_help_all_flag("--help-all", "Print help for all subcommands");
+  app.set_version_flag("--version", [] {
+    return std::string("msdeform ") + msd::version() + "\n" + msd::build_info() +
+           "\nLicence GPL-3.0-or-later (see LICENSE; CGAL's Polygon Mesh Processing is GPL-3.0-or-later)";
+  });
   msd::cli::add_info_command(app);
   msd::cli::add_scene_command(app);
   msd::cli::add_deform_command(app);

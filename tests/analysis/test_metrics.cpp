@@ -2,10 +2,10 @@
 
 #include <cmath>
 
-#include "analysis/metrics.h"
-#include "core/errors.h"
-#include "core/mesh_io.h"
-#include "core/scenes.h"
+#include "msdeform/analysis/metrics.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/scenes.h"
 #include "test_util.h"
 
 using namespace msd;

@@ -7,11 +7,11 @@
 #include <utility>
 #include <vector>
 
-#include "analysis/render.h"
-#include "core/atomic_file.h"
-#include "core/errors.h"
-#include "core/mesh_io.h"
-#include "core/scenes.h"
+#include "msdeform/analysis/render.h"
+#include "msdeform/core/atomic_file.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/scenes.h"
 #include "test_util.h"
 
 using namespace msd;

@@ -1,8 +1,8 @@
 #include <catch2/catch.hpp>
 
-#include "analysis/self_intersections.h"
-#include "core/errors.h"
-#include "core/mesh_io.h"
+#include "msdeform/analysis/self_intersections.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
 #include "test_util.h"
 
 using namespace msd;

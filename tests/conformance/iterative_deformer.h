@@ -7,8 +7,8 @@
 
 #include <Eigen/IterativeLinearSolvers>
 
-#include "core/laplacian.h"
-#include "deformation/deformer.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/deformation/deformer.h"
 
 namespace msd::test {
 

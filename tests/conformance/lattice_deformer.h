@@ -6,7 +6,7 @@
 
 #include <array>
 
-#include "deformation/deformer.h"
+#include "msdeform/deformation/deformer.h"
 
 namespace msd::test {
 

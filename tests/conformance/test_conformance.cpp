@@ -10,9 +10,9 @@
 
 #include "conformance/iterative_deformer.h"
 #include "conformance/lattice_deformer.h"
-#include "core/errors.h"
-#include "core/scenes.h"
-#include "reconstruction/catalogue.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/reconstruction/catalogue.h"
 #include "test_util.h"
 
 // Counts calls of the global operator new while `counting` is set (the frames of linear methods must not

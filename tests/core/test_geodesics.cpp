@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/errors.h"
-#include "core/geodesics.h"
-#include "core/scenes.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/geodesics.h"
+#include "msdeform/core/scenes.h"
 #include "test_util.h"
 
 using namespace msd;

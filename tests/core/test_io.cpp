@@ -3,12 +3,12 @@
 #include <fstream>
 #include <random>
 
-#include "core/edit_case.h"
-#include "core/errors.h"
-#include "core/mesh_info.h"
-#include "core/mesh_io.h"
-#include "core/scenes.h"
-#include "core/surface_check.h"
+#include "msdeform/core/edit_case.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_info.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/core/surface_check.h"
 #include "test_util.h"
 
 using namespace msd;

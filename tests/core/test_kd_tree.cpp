@@ -3,7 +3,7 @@
 #include <cmath>
 #include <random>
 
-#include "core/kd_tree.h"
+#include "msdeform/core/kd_tree.h"
 
 using namespace msd;
 

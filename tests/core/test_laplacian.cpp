@@ -3,9 +3,9 @@
 #include <Eigen/Eigenvalues>
 #include <random>
 
-#include "core/laplacian.h"
-#include "core/mesh_io.h"
-#include "core/scenes.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/scenes.h"
 #include "test_util.h"
 
 using namespace msd;

@@ -1,7 +1,7 @@
 #include <catch2/catch.hpp>
 
-#include "core/mesh.h"
-#include "core/scenes.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/scenes.h"
 #include "test_util.h"
 
 using namespace msd;

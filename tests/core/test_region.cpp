@@ -1,9 +1,9 @@
 #include <catch2/catch.hpp>
 
-#include "core/errors.h"
-#include "core/mesh_io.h"
-#include "core/region.h"
-#include "core/scenes.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/scenes.h"
 #include "test_util.h"
 
 using namespace msd;

@@ -2,7 +2,7 @@
 
 #include <random>
 
-#include "core/rotation.h"
+#include "msdeform/core/rotation.h"
 
 using namespace msd;
 

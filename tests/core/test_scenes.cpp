@@ -1,8 +1,8 @@
 #include <catch2/catch.hpp>
 
-#include "core/errors.h"
-#include "core/mesh_io.h"
-#include "core/scenes.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/scenes.h"
 #include "test_util.h"
 
 using namespace msd;

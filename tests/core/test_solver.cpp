@@ -2,9 +2,9 @@
 
 #include <Eigen/Dense>
 
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/solver.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/solver.h"
 #include "test_util.h"
 
 using namespace msd;

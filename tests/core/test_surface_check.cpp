@@ -3,8 +3,8 @@
 #include <cmath>
 #include <random>
 
-#include "core/errors.h"
-#include "core/surface_check.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/surface_check.h"
 #include "test_util.h"
 
 using namespace msd;

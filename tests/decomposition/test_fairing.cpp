@@ -1,11 +1,11 @@
 #include <catch2/catch.hpp>
 
-#include "core/adjacency.h"
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/scenes.h"
-#include "decomposition/fairing.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/decomposition/fairing.h"
 #include "test_util.h"
 
 using namespace msd;

@@ -1,11 +1,11 @@
 #include <catch2/catch.hpp>
 
-#include "core/adjacency.h"
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/scenes.h"
-#include "decomposition/hierarchy.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/decomposition/hierarchy.h"
 
 using namespace msd;
 using Catch::Matchers::Contains;

@@ -1,9 +1,9 @@
 #include <catch2/catch.hpp>
 
-#include "core/errors.h"
-#include "core/scenes.h"
-#include "decomposition/detail_check.h"
-#include "decomposition/low_pass.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/decomposition/detail_check.h"
+#include "msdeform/decomposition/low_pass.h"
 #include "test_util.h"
 
 using namespace msd;

@@ -7,10 +7,10 @@
 #include <utility>
 #include <vector>
 
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/scenes.h"
-#include "decomposition/remesh.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/decomposition/remesh.h"
 #include "test_util.h"
 
 using namespace msd;

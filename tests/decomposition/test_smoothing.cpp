@@ -2,12 +2,12 @@
 
 #include <random>
 
-#include "core/adjacency.h"
-#include "core/checks.h"
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/scenes.h"
-#include "decomposition/smoothing.h"
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/decomposition/smoothing.h"
 #include "test_util.h"
 
 using namespace msd;

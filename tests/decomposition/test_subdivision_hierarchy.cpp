@@ -2,9 +2,9 @@
 
 #include <random>
 
-#include "core/errors.h"
-#include "core/scenes.h"
-#include "decomposition/subdivision_hierarchy.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/decomposition/subdivision_hierarchy.h"
 
 using namespace msd;
 using Catch::Matchers::Contains;

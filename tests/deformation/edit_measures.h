@@ -5,10 +5,10 @@
 #include <cmath>
 #include <string>
 
-#include "core/edit_case.h"
-#include "core/mesh.h"
-#include "core/region.h"
-#include "core/scenes.h"
+#include "msdeform/core/edit_case.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/region.h"
+#include "msdeform/core/scenes.h"
 #include "test_util.h"
 
 namespace msd::test {

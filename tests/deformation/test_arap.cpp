@@ -1,11 +1,11 @@
 #include <catch2/catch.hpp>
 
-#include "analysis/metrics.h"
-#include "core/edit_case.h"
-#include "core/errors.h"
-#include "core/scenes.h"
-#include "deformation/arap.h"
-#include "deformation/shell.h"
+#include "msdeform/analysis/metrics.h"
+#include "msdeform/core/edit_case.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/deformation/arap.h"
+#include "msdeform/deformation/shell.h"
 #include "test_util.h"
 
 using namespace msd;

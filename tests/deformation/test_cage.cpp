@@ -4,9 +4,9 @@
 
 #include <random>
 
-#include "core/errors.h"
-#include "core/scenes.h"
-#include "deformation/cage.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/deformation/cage.h"
 #include "test_util.h"
 
 namespace msd {

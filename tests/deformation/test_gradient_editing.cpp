@@ -1,13 +1,13 @@
 #include <catch2/catch.hpp>
 
-#include "analysis/metrics.h"
-#include "core/laplacian.h"
-#include "core/scenes.h"
-#include "core/solver.h"
+#include "msdeform/analysis/metrics.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/core/solver.h"
 #include "deformation/edit_measures.h"
-#include "deformation/gradient_editing.h"
-#include "deformation/propagation.h"
-#include "deformation/shell.h"
+#include "msdeform/deformation/gradient_editing.h"
+#include "msdeform/deformation/propagation.h"
+#include "msdeform/deformation/shell.h"
 
 using namespace msd;
 

@@ -1,10 +1,10 @@
 #include <catch2/catch.hpp>
 
-#include "analysis/metrics.h"
-#include "core/scenes.h"
+#include "msdeform/analysis/metrics.h"
+#include "msdeform/core/scenes.h"
 #include "deformation/edit_measures.h"
-#include "deformation/laplacian_editing.h"
-#include "deformation/shell.h"
+#include "msdeform/deformation/laplacian_editing.h"
+#include "msdeform/deformation/shell.h"
 
 using namespace msd;
 

@@ -2,11 +2,11 @@
 
 #include <cmath>
 
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/mesh_io.h"
-#include "core/scenes.h"
-#include "deformation/propagation.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/deformation/propagation.h"
 #include "test_util.h"
 
 using namespace msd;

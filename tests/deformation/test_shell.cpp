@@ -2,10 +2,10 @@
 
 #include <random>
 
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/scenes.h"
-#include "deformation/shell.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/deformation/shell.h"
 #include "test_util.h"
 
 using namespace msd;

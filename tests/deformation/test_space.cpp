@@ -4,11 +4,11 @@
 
 #include <random>
 
-#include "core/errors.h"
-#include "core/scenes.h"
-#include "deformation/lattice.h"
-#include "deformation/rbf.h"
-#include "reconstruction/catalogue.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/deformation/lattice.h"
+#include "msdeform/deformation/rbf.h"
+#include "msdeform/reconstruction/catalogue.h"
 #include "test_util.h"
 
 namespace msd {

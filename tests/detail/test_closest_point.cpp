@@ -2,8 +2,8 @@
 
 #include <random>
 
-#include "core/errors.h"
-#include "detail/closest_point.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/detail/closest_point.h"
 #include "test_util.h"
 
 using namespace msd;

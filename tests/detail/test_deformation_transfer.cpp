@@ -9,10 +9,10 @@
 #include <limits>
 #include <vector>
 
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/scenes.h"
-#include "detail/deformation_transfer.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/detail/deformation_transfer.h"
 #include "test_util.h"
 
 using namespace msd;

@@ -3,9 +3,9 @@
 #include <cmath>
 #include <random>
 
-#include "core/errors.h"
-#include "core/scenes.h"
-#include "detail/displacement_vectors.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/detail/displacement_vectors.h"
 #include "test_util.h"
 
 using namespace msd;

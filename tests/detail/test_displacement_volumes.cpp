@@ -7,9 +7,9 @@
 #include <cmath>
 #include <vector>
 
-#include "core/scenes.h"
-#include "detail/displacement_volumes.h"
-#include "detail/normal_displacements.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/detail/displacement_volumes.h"
+#include "msdeform/detail/normal_displacements.h"
 #include "test_util.h"
 
 using namespace msd;

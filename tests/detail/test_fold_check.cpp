@@ -1,9 +1,9 @@
 #include <catch2/catch.hpp>
 
-#include "core/errors.h"
-#include "core/scenes.h"
-#include "detail/fold_check.h"
-#include "detail/normal_displacements.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/detail/fold_check.h"
+#include "msdeform/detail/normal_displacements.h"
 #include "test_util.h"
 
 using namespace msd;

@@ -2,11 +2,11 @@
 
 #include <cmath>
 
-#include "core/errors.h"
-#include "core/laplacian.h"
-#include "core/scenes.h"
-#include "core/subdivision.h"
-#include "detail/normal_displacements.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/core/subdivision.h"
+#include "msdeform/detail/normal_displacements.h"
 #include "test_util.h"
 
 using namespace msd;

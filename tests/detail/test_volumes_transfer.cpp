@@ -5,12 +5,12 @@
 #include <limits>
 #include <vector>
 
-#include "core/errors.h"
-#include "core/scenes.h"
-#include "core/subdivision.h"
-#include "detail/deformation_transfer.h"
-#include "detail/displacement_volumes.h"
-#include "detail/normal_displacements.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/core/subdivision.h"
+#include "msdeform/detail/deformation_transfer.h"
+#include "msdeform/detail/displacement_volumes.h"
+#include "msdeform/detail/normal_displacements.h"
 #include "test_util.h"
 
 using namespace msd;

@@ -1,13 +1,13 @@
 #include <catch2/catch.hpp>
 
-#include "core/errors.h"
-#include "core/mesh_io.h"
-#include "core/scenes.h"
-#include "decomposition/fairing.h"
-#include "deformation/shell.h"
-#include "detail/displacement_vectors.h"
-#include "detail/normal_displacements.h"
-#include "reconstruction/multiscale.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/decomposition/fairing.h"
+#include "msdeform/deformation/shell.h"
+#include "msdeform/detail/displacement_vectors.h"
+#include "msdeform/detail/normal_displacements.h"
+#include "msdeform/reconstruction/multiscale.h"
 #include "test_util.h"
 
 using namespace msd;

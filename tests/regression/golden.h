@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "apps/compare/runner.h"
-#include "core/atomic_file.h"
+#include "msdeform/core/atomic_file.h"
 
 namespace msd::test {
 

@@ -5,12 +5,12 @@
 #include <catch2/catch.hpp>
 
 #include "apps/compare/runner.h"
-#include "analysis/self_intersections.h"
-#include "core/scenes.h"
-#include "detail/deformation_transfer.h"
-#include "detail/displacement_volumes.h"
-#include "detail/normal_displacements.h"
 #include "golden.h"
+#include "msdeform/analysis/self_intersections.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/detail/deformation_transfer.h"
+#include "msdeform/detail/displacement_volumes.h"
+#include "msdeform/detail/normal_displacements.h"
 #include "test_util.h"
 
 using namespace msd;

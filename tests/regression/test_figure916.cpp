@@ -6,8 +6,8 @@
 
 
 #include "apps/compare/runner.h"
-#include "core/edge_scale.h"
 #include "golden.h"
+#include "msdeform/core/edge_scale.h"
 #include "test_util.h"
 
 using namespace msd;

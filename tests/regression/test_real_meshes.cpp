@@ -8,8 +8,8 @@
 #include <cstdio>
 
 #include "apps/compare/runner.h"
-#include "core/mesh_io.h"
 #include "golden.h"
+#include "msdeform/core/mesh_io.h"
 #include "test_util.h"
 
 using namespace msd;

@@ -7,8 +7,8 @@
 #include <algorithm>
 
 #include "apps/compare/runner.h"
-#include "core/surface_check.h"
 #include "golden.h"
+#include "msdeform/core/surface_check.h"
 #include "test_util.h"
 
 using namespace msd;

@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libopenmesh-dev libembree-dev libcgal-dev libosd-dev
   libsuitesparse-dev libopenblas-dev libtbb-dev
   catch2 libcli11-dev libstb-dev
+  pybind11-dev python3-dev python3-numpy python3-pytest
   libcgal-demo
 )
 

@@ -1,0 +1,299 @@
+"""The Deformer: every catalogue method on the bumpy plane (handles met, rest pose from identity
+transforms), options, frames, the no-copy output, the GIL, and the errors."""
+
+import threading
+import time
+import warnings
+
+import numpy as np
+import pytest
+
+import msdeform
+
+from conftest import diagonal
+
+ALL_METHODS = ["shell", "propagate", "gradient", "laplacian", "arap", "primo", "lattice", "cage-mvc",
+               "cage-harmonic", "rbf", "multiscale-vectors", "multiscale-normal", "multiscale-volumes",
+               "multiscale-transfer"]
+# Options that keep the suite fast at this size (the defaults are for 10k+ vertices).
+FAST = {"cage-harmonic": {"harmonic_resolution": 32}}
+
+
+@pytest.fixture(scope="module")
+def prepared(lift):
+    """prepared(name): the method prepared on the lift scene (once per module)."""
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            d = msdeform.Deformer(name, **FAST.get(name, {}))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", msdeform.MsdeformWarning)
+                d.prepare(lift.V, lift.F, lift.labels)
+            cache[name] = d
+        return cache[name]
+
+    return get
+
+
+def test_catalogue_lists_every_method_with_section_and_summary():
+    infos = msdeform.methods()
+    assert [m.name for m in infos] == ALL_METHODS
+    for m in infos:
+        assert m.section.startswith("9.") and len(m.summary) > 20
+        assert m.traits.domain in ("surface", "space")
+        assert set(m.options) == set(msdeform.method_options(m.name))
+    space = {m.name for m in infos if m.traits.domain == "space"}
+    assert space == {"lattice", "cage-mvc", "cage-harmonic", "rbf"}
+    assert "iterations" in msdeform.method_options("arap")
+    assert "default 1000" in msdeform.method_options("arap")["iterations"]
+    assert "ks" in msdeform.method_options("multiscale-normal")  # the base method's (shell) options
+    assert "anderson" in msdeform.method_options("multiscale-normal", base_method="arap")
+
+
+@pytest.mark.parametrize("edit", ["lift", "bend"])
+@pytest.mark.parametrize("name", ALL_METHODS)
+def test_every_method_meets_its_handle(name, edit, prepared, request):
+    case = request.getfixturevalue(edit)
+    V, F, labels, transforms = case
+    d = prepared(name)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", msdeform.MsdeformWarning)
+        out = d.deform(transforms)
+    assert out.shape == V.shape and out.dtype == np.float64 and np.isfinite(out).all()
+    error = msdeform.handle_error(V, out, labels, transforms)
+    if d.traits.exact_constraints:
+        assert error <= 1e-8, f"{name}: handle error {error}"
+    else:
+        assert error <= 0.05 * diagonal(V), f"{name}: handle error {error}"
+        assert d.frame_report.constraint_error is not None
+        assert d.frame_report.constraint_error == pytest.approx(error, rel=1e-6, abs=1e-12)
+    # The free strip follows: it moves, and no further than the handle.
+    free = labels == 1
+    motion = np.linalg.norm(out - V, axis=1)
+    handle_motion = np.linalg.norm(out[labels == 2] - V[labels == 2], axis=1).max()
+    assert 0.05 * handle_motion < motion[free].mean() < handle_motion
+
+
+# Identity transforms give the rest pose, to round-off: the linear methods' frames are linear maps of
+# T - I, the iterative ones start from rest, the multi-scale ones reconstruct S = B + D from their
+# encoding (measured at most 7e-13 of the diagonal, laplacian 5e-13, the others below 1e-14).
+IDENTITY_TOLERANCE = 1e-10
+
+
+@pytest.mark.parametrize("name", ALL_METHODS)
+def test_identity_transforms_give_the_rest_pose(name, lift, prepared):
+    d = prepared(name)
+    d.reset()
+    out = d.deform([msdeform.identity()])
+    deviation = np.abs(out - lift.V).max() / diagonal(lift.V)
+    assert deviation <= IDENTITY_TOLERANCE, f"{name}: {deviation}"
+
+
+def test_transform_forms_agree_and_the_result_owns_its_data(lift, prepared):
+    d = prepared("shell")
+    T = lift.transforms[0]
+    a = d.deform([T])
+    np.testing.assert_array_equal(a, d.deform(T))  # one 4x4: one handle
+    np.testing.assert_array_equal(a, d.deform(np.stack([T])))  # an (H, 4, 4) array
+    np.testing.assert_array_equal(a, d.deform([T.tolist()]))  # nested lists
+    # No copy: the library's column-major buffer, handed over to numpy through a capsule (no other array
+    # or object aliases it), writable, and not touched by later frames.
+    assert a.flags.f_contiguous and a.flags.writeable
+    assert type(a.base).__name__ == "PyCapsule"
+    kept = a.copy()
+    b = d.deform([msdeform.identity()])
+    np.testing.assert_array_equal(a, kept)
+    a[:] = 0
+    np.testing.assert_array_equal(d.deform([msdeform.identity()]), b)
+
+
+def test_options_configure_the_method(lift):
+    arap = msdeform.Deformer("arap", iterations=7, tolerance=0, anderson=0, energy="spokes-and-rims")
+    assert arap.options == {"iterations": 7, "tolerance": 0.0, "anderson": 0, "energy": "spokes-and-rims",
+                            "min_weight_ratio": 0.1}
+    arap.prepare(lift.V, lift.F, lift.labels)
+    arap.deform(lift.transforms)
+    report = arap.frame_report
+    assert report.iterations == 7 and report.converged  # tolerance 0: exactly `iterations`, as asked
+    assert "iterations=7" in repr(arap)
+    short = msdeform.Deformer("arap", iterations=2)
+    short.prepare(lift.V, lift.F, lift.labels)
+    with pytest.warns(msdeform.MsdeformWarning, match="stopped after 2 iterations"):
+        short.deform(lift.transforms)
+    report = short.frame_report
+    assert report.iterations == 2 and not report.converged and report.residual > 0
+    assert report.warnings and "raise the iteration limit" in report.warnings[0]
+
+    ms = msdeform.Deformer("multiscale-normal", base_method="arap", iterations=3, detail_scale=0.3)
+    assert ms.options["base_method"] == "arap" and ms.options["iterations"] == 3
+    assert msdeform.Deformer("multiscale-normal", base_method="shell").options["kb"] == 1.0
+    assert msdeform.Deformer("lattice", cells=(4, 3, 2)).options["cells"] == (4, 3, 2)
+    assert msdeform.Deformer("lattice", cells=5, seed_least_norm=True).options["seed_least_norm"] is True
+
+
+def test_a_python_transfer_function(lift):
+    linear = msdeform.Deformer("propagate")
+    squared = msdeform.Deformer("propagate", transfer=lambda s: s * s)
+    assert squared.options["transfer"] == "custom"
+    for d in (linear, squared):
+        d.prepare(lift.V, lift.F, lift.labels)
+    a, b = linear.deform(lift.transforms), squared.deform(lift.transforms)
+    assert msdeform.handle_error(lift.V, b, lift.labels, lift.transforms) <= 1e-12
+    free = lift.labels == 1
+    assert (b[free, 2] - lift.V[free, 2]).mean() < (a[free, 2] - lift.V[free, 2]).mean()  # s^2 <= s
+    with pytest.raises(ZeroDivisionError):
+        msdeform.Deformer("propagate", transfer=lambda s: 1 / 0).prepare(lift.V, lift.F, lift.labels)
+
+
+def test_unknown_method_and_options_are_refused_by_name():
+    with pytest.raises(ValueError, match="unknown method 'arapp'.*arap, primo"):
+        msdeform.Deformer("arapp")
+    with pytest.raises(TypeError, match=r"unknown option 'iteration' \(did you mean 'iterations'\?\).*"
+                                        r"arap takes: iterations, tolerance, anderson"):
+        msdeform.Deformer("arap", iteration=10)
+    with pytest.raises(TypeError, match="option 'ks' configures shell .*not arap"):
+        msdeform.Deformer("arap", ks=1.0)
+    with pytest.raises(TypeError, match="gradient takes no options"):
+        msdeform.Deformer("gradient", kb=1.0)
+    with pytest.raises(TypeError, match="option iterations must be an int, got float"):
+        msdeform.Deformer("arap", iterations=10.0)
+    with pytest.raises(TypeError, match="option ks must be a number, got bool"):
+        msdeform.Deformer("shell", ks=True)
+    with pytest.raises(ValueError, match="option energy must be one of 'spokes', 'spokes-and-rims', got 'rims'"):
+        msdeform.Deformer("arap", energy="rims")
+    with pytest.raises(ValueError, match="base_method must be a single-scale method"):
+        msdeform.Deformer("multiscale-normal", base_method="multiscale-vectors")
+    with pytest.raises(msdeform.InvalidInput):  # the library's own check of the value
+        msdeform.Deformer("arap", iterations=0)
+    with pytest.raises(ValueError, match="control applies to base='subdivision'"):
+        msdeform.Deformer("multiscale-normal", control=msdeform.scene("lift", 100).control)
+
+
+def test_frame_errors(lift, prepared):
+    fresh = msdeform.Deformer("shell")
+    with pytest.raises(msdeform.UsageError, match="before prepare") as info:
+        fresh.deform(lift.transforms)
+    assert isinstance(info.value, RuntimeError)
+    d = prepared("shell")
+    T = lift.transforms[0]
+    with pytest.raises(ValueError, match=r"2 handle transforms given, the region has 1 handle"):
+        d.deform([T, T])
+    with pytest.raises(ValueError, match=r"got shape \(3, 4\)"):
+        d.deform(T[:3])
+    bad = T.copy()
+    bad[3, 0] = 1
+    with pytest.raises(ValueError, match="not affine"):
+        d.deform([bad])
+    bad = T.copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(ValueError, match="non-finite"):
+        d.deform([bad])
+
+
+def test_prepare_errors(lift):
+    V, F, labels, _ = lift
+    d = msdeform.Deformer("shell")
+    with pytest.raises(ValueError, match=r"V must have shape \(N, 3\), got shape \(%d, 2\)" % len(V)):
+        d.prepare(V[:, :2], F, labels)
+    with pytest.raises(TypeError, match="F must hold vertex indices"):
+        d.prepare(V, F.astype(float), labels)
+    worse = F.copy()
+    worse[3, 1] = len(V)
+    with pytest.raises(ValueError, match=r"F\[3, 1\] = %d is not a vertex index" % len(V)):
+        d.prepare(V, worse, labels)
+    nan = V.copy()
+    nan[4, 2] = np.nan
+    with pytest.raises(ValueError, match=r"V\[4, 2\] is nan"):
+        d.prepare(nan, F, labels)
+    with pytest.raises(ValueError, match="surface method needs triangles"):
+        d.prepare(V, None, labels)
+    # A free vertex that touches nothing constrained: its shape is undetermined.
+    lonely = np.vstack([V, [[5.0, 5.0, 5.0]]])
+    with pytest.raises(msdeform.TopologyError, match="touches no fixed or handle vertex"):
+        msdeform.Deformer("shell").prepare(lonely, F, np.append(labels, 1))
+
+
+def test_deform_to_matches_affine_targets(lift, prepared):
+    V, F, labels, transforms = lift
+    d = prepared("shell")
+    assert d.traits.vertex_targets
+    c = msdeform.constrained_vertices(labels)
+    targets = V[c].copy()
+    handle = labels[c] == 2
+    targets[handle] = targets[handle] @ transforms[0][:3, :3].T + transforms[0][:3, 3]
+    np.testing.assert_allclose(d.deform_to(targets), d.deform(transforms), rtol=0, atol=1e-10)
+    with pytest.raises(ValueError, match=f"has {len(c) - 1} rows, expected {len(c)}"):
+        d.deform_to(targets[:-1])
+    with pytest.raises(msdeform.UsageError, match="not per-vertex targets"):
+        prepared("propagate").deform_to(targets)
+
+
+def test_space_methods_evaluate_their_map_anywhere(lift, prepared):
+    rbf = prepared("rbf")
+    rbf.reset()
+    np.testing.assert_array_equal(rbf.evaluate(lift.V), lift.V)  # identity at rest
+    out = rbf.deform(lift.transforms)
+    np.testing.assert_allclose(rbf.evaluate(lift.V), out, rtol=0, atol=1e-12)
+    mid = rbf.evaluate([[0.5, 0.5, 0.0]])
+    assert mid.shape == (1, 3) and 0 < mid[0, 2] < 0.3
+    with pytest.raises(msdeform.UsageError, match="surface method"):
+        prepared("shell").evaluate(lift.V)
+
+
+def test_space_methods_take_point_clouds(lift):
+    lattice = msdeform.Deformer("lattice")
+    lattice.prepare(lift.V, None, lift.labels)
+    assert lattice.traits.domain == "space" and not lattice.traits.exact_constraints
+    out = lattice.deform(lift.transforms)
+    assert msdeform.handle_error(lift.V, out, lift.labels, lift.transforms) <= 0.05 * diagonal(lift.V)
+
+
+def test_initial_guess_and_reset(lift):
+    V, F, labels, transforms = lift
+    arap = msdeform.Deformer("arap")
+    arap.prepare(V, F, labels)
+    assert arap.traits.initial_guess and arap.traits.solve == "iterative"
+    solved = arap.deform(transforms)
+    cold = arap.frame_report.iterations
+    arap.set_initial_guess(solved)
+    again = arap.deform(transforms)
+    assert arap.frame_report.iterations < cold
+    np.testing.assert_allclose(again, solved, rtol=0, atol=1e-4 * diagonal(V))
+    arap.reset()
+    assert arap.frame_report.iterations == 0
+    with pytest.raises(ValueError, match="X has 3 rows"):
+        arap.set_initial_guess(V[:3])
+    with pytest.raises(msdeform.UsageError, match="takes no initial guess"):
+        shell = msdeform.Deformer("shell")
+        shell.prepare(V, F, labels)
+        shell.set_initial_guess(V)
+
+
+def test_multiscale_exposes_its_base(lift, prepared):
+    d = prepared("multiscale-normal")
+    B, FB = d.base
+    assert B.shape == lift.V.shape and FB.shape == lift.F.shape
+    assert d.detail_scale >= 0
+    assert prepared("shell").base is None
+
+
+def test_prepare_releases_the_gil():
+    edit = msdeform.scene("lift", 20000)
+    d = msdeform.Deformer("rbf")
+    start = time.perf_counter()
+    d.prepare(edit.V, edit.F, edit.labels)
+    duration = time.perf_counter() - start
+    if duration < 0.05:
+        pytest.skip(f"prepare took only {duration:.3f} s: too short to see the GIL")
+    done = threading.Event()
+    thread = threading.Thread(target=lambda: (d.prepare(edit.V, edit.F, edit.labels), done.set()))
+    ticks = []
+    thread.start()
+    while not done.is_set():
+        ticks.append(time.perf_counter())
+    thread.join()
+    gaps = np.diff(ticks)
+    # Held, the GIL would stop this loop for the whole prepare(); released, only for the thread's
+    # Python-level moments (the interpreter's switch interval, 5 ms).
+    assert gaps.max() < 0.5 * duration, f"the main thread stalled {gaps.max():.3f} s of a {duration:.3f} s prepare"

@@ -1,0 +1,142 @@
+"""Files: meshes, soups and point clouds, .sel, .def and .dmat, edits, and the errors for missing or
+malformed files."""
+
+import numpy as np
+import pytest
+
+import msdeform
+
+
+@pytest.mark.parametrize("ext", [".off", ".obj", ".ply"])
+def test_mesh_round_trip_keeps_vertices_and_faces_exactly(tmp_path, lift, ext):
+    path = tmp_path / f"plane{ext}"
+    msdeform.write_mesh(path, lift.V, lift.F)
+    V, F = msdeform.read_mesh(path)
+    assert V.dtype == np.float64 and V.shape == lift.V.shape
+    assert F.dtype == np.int32 and F.shape == lift.F.shape
+    np.testing.assert_array_equal(V, lift.V)  # full double precision
+    np.testing.assert_array_equal(F, lift.F)
+
+
+def test_read_mesh_accepts_str_paths_and_reports_what_loading_did(tmp_path):
+    path = tmp_path / "quad.off"
+    path.write_text("OFF\n5 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 2 2\n4 0 1 2 3\n3 0 1 2\n")
+    V, F, report = msdeform.read_mesh(str(path), return_report=True)
+    assert V.shape == (5, 3)  # the unreferenced vertex is kept: .sel files index the file's vertices
+    assert F.shape == (2, 3)  # the quad's fan (0 1 2) (0 2 3); the triangle 0 1 2 again is dropped
+    assert report["polygons_triangulated"] == 1
+    assert report["duplicate_faces_dropped"] == 1
+
+
+def test_point_cloud_round_trip_and_read_mesh_refuses_it(tmp_path, lift):
+    path = tmp_path / "cloud.ply"
+    msdeform.write_mesh(path, lift.V)  # no faces
+    V, F = msdeform.read_soup(path)
+    np.testing.assert_array_equal(V, lift.V)
+    assert F.shape == (0, 3) and F.dtype == np.int32
+    with pytest.raises(ValueError, match="face"):
+        msdeform.read_mesh(path)
+
+
+def test_write_mesh_scalar_property(tmp_path, lift):
+    path = tmp_path / "height.ply"
+    msdeform.write_mesh(path, lift.V, lift.F, scalar=lift.V[:, 2], scalar_name="height")
+    assert b"property double height" in path.read_bytes()[:1000]
+    with pytest.raises(ValueError, match="one value per vertex"):
+        msdeform.write_mesh(path, lift.V, lift.F, scalar=lift.V[:10, 2])
+
+
+def test_sel_round_trip(tmp_path, lift):
+    path = tmp_path / "plane.sel"
+    msdeform.write_sel(path, lift.labels)
+    labels = msdeform.read_sel(path, len(lift.V))
+    assert labels.dtype == np.int32
+    np.testing.assert_array_equal(labels, lift.labels)
+
+
+def test_read_sel_names_the_count_mismatch(tmp_path, lift):
+    path = tmp_path / "plane.sel"
+    msdeform.write_sel(path, lift.labels)
+    n = len(lift.V)
+    with pytest.raises(ValueError, match=f"{n} labels but the mesh has {n + 1} vertices") as info:
+        msdeform.read_sel(path, n + 1)
+    assert isinstance(info.value, msdeform.InvalidInput)
+    assert "plane.sel" in str(info.value)
+
+
+def test_def_round_trip_is_exact(tmp_path):
+    T = [msdeform.rotation((1, 2, 3), 37.5, about=(0.1, 0.2, 0.3)) @ msdeform.translation((0.5, -1 / 3, 2)),
+         msdeform.scaling(1.25)]
+    path = tmp_path / "two.def"
+    msdeform.write_def(path, T)
+    back = msdeform.read_def(path)
+    assert isinstance(back, list) and len(back) == 2
+    for a, b in zip(back, T):
+        assert a.shape == (4, 4) and a.dtype == np.float64
+        np.testing.assert_array_equal(a, b)  # 17 significant digits
+    msdeform.write_def(path, np.stack(T))  # an (H, 4, 4) array is accepted too
+    np.testing.assert_array_equal(np.stack(msdeform.read_def(path)), np.stack(T))
+
+
+def test_read_def_refuses_a_matrix_that_is_not_affine(tmp_path):
+    path = tmp_path / "bad.def"
+    path.write_text("1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n")
+    with pytest.raises(ValueError, match="0 0 0 1"):
+        msdeform.read_def(path)
+
+
+def test_dmat_groups_are_free_and_handles(tmp_path):
+    path = tmp_path / "groups.dmat"
+    path.write_text("1 5\n-1\n0\n0\n-1\n1\n")
+    np.testing.assert_array_equal(msdeform.read_dmat_groups(path, 5), [1, 2, 2, 1, 3])
+
+
+def test_missing_files_raise_file_not_found(tmp_path, lift):
+    missing = tmp_path / "missing.off"
+    for read in (msdeform.read_mesh, msdeform.read_soup, msdeform.read_def,
+                 lambda p: msdeform.read_sel(p, 3), lambda p: msdeform.read_dmat_groups(p, 3),
+                 msdeform.load_edit):
+        with pytest.raises(FileNotFoundError) as info:
+            read(missing)
+        assert info.value.filename == str(missing)
+    with pytest.raises(FileNotFoundError):
+        msdeform.write_mesh(tmp_path / "no-such-folder" / "x.off", lift.V, lift.F)
+    with pytest.raises(IsADirectoryError):
+        msdeform.write_mesh(tmp_path, lift.V, lift.F)
+
+
+def test_unknown_extension_and_bad_path_type(tmp_path, lift):
+    with pytest.raises(ValueError, match=r"\.xyz"):
+        msdeform.write_mesh(tmp_path / "x.xyz", lift.V, lift.F)
+    with pytest.raises(TypeError, match="path"):
+        msdeform.read_mesh(42)
+
+
+def test_load_edit_reads_mesh_region_and_transforms(tmp_path, lift):
+    msdeform.write_mesh(tmp_path / "e.off", lift.V, lift.F)
+    msdeform.write_sel(tmp_path / "e.sel", lift.labels)
+    msdeform.write_def(tmp_path / "e.def", lift.transforms)
+    edit = msdeform.load_edit(tmp_path / "e.off", tmp_path / "e.sel", tmp_path / "e.def")
+    V, F, labels, transforms = edit
+    np.testing.assert_array_equal(V, lift.V)
+    np.testing.assert_array_equal(F, lift.F)
+    np.testing.assert_array_equal(labels, lift.labels)
+    np.testing.assert_array_equal(transforms[0], lift.transforms[0])
+    assert edit.name == "e" and edit.surface_problem is None and edit.control is None
+    bare = msdeform.load_edit(tmp_path / "e.off")
+    assert bare.labels is None and bare.transforms == []
+
+
+def test_scenes(lift):
+    assert set(msdeform.scene_names()) >= {"lift", "bend120", "twist135", "bar-lift", "bar-bend120", "bar-twist135"}
+    V, F, labels, transforms = lift
+    assert V.dtype == np.float64 and V.shape[1] == 3 and F.dtype == np.int32 and labels.dtype == np.int32
+    assert set(np.unique(labels)) == {0, 1, 2}
+    assert len(transforms) == 1
+    np.testing.assert_allclose(transforms[0], msdeform.translation((0, 0, 0.3)), atol=1e-15)
+    assert isinstance(lift.control, msdeform.ControlMesh) and lift.control.V.shape[0] < len(V)
+    assert msdeform.scene("lift", "1k").V.shape == V.shape
+    with pytest.raises(ValueError, match="unknown scene 'nope'.*bend120"):
+        msdeform.scene("nope")
+    with pytest.raises(TypeError, match="resolution"):
+        msdeform.scene("lift", 1000.5)

@@ -12,7 +12,7 @@ if(NOT MSD_SHARED)
   endif()
 endif()
 install(EXPORT msdeformTargets NAMESPACE msdeform:: DESTINATION "${MSD_CMAKE_DIR}" COMPONENT development)
-install(FILES "${MSD_INCLUDE_DIR}/msdeform/version.h" DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}/msdeform"
+install(FILES "${MSD_INCLUDE_DIR}/msdeform/version.h" "${MSD_INCLUDE_DIR}/msdeform/config.h" DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}/msdeform"
         COMPONENT development)
 
 configure_package_config_file(cmake/msdeformConfig.cmake.in "${PROJECT_BINARY_DIR}/msdeformConfig.cmake"

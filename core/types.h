@@ -5,12 +5,18 @@
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
 
-// msdeform's libraries are built with Eigen's alignment pinned to 16 bytes and Eigen's own aligned
-// allocation (core/CMakeLists.txt): types in these headers must have the same layout, and heap blocks the
-// same allocator, in the library and in the code that uses it, whatever either's instruction set.
-static_assert(EIGEN_MAX_ALIGN_BYTES == 16 && EIGEN_MALLOC_ALREADY_ALIGNED == 0,
-              "msdeform: compile with EIGEN_MAX_ALIGN_BYTES=16 and EIGEN_MALLOC_ALREADY_ALIGNED=0, as msdeform's "
-              "libraries are (the msdeform:: CMake targets add both; define them before any Eigen header)");
+#include "msdeform/config.h"
+
+// Eigen's layout of fixed-size types and its heap allocator follow the instruction set and EIGEN_* defines
+// (cmake/EigenAbi.cmake). Code built with other settings than msdeform's libraries would misread the
+// objects it exchanges with them or free their blocks wrongly, so it stops here instead.
+static_assert(EIGEN_MAX_STATIC_ALIGN_BYTES == MSD_EIGEN_MAX_STATIC_ALIGN_BYTES &&
+                  EIGEN_MAX_ALIGN_BYTES == MSD_EIGEN_MAX_ALIGN_BYTES &&
+                  EIGEN_DEFAULT_ALIGN_BYTES == MSD_EIGEN_DEFAULT_ALIGN_BYTES &&
+                  EIGEN_MALLOC_ALREADY_ALIGNED == MSD_EIGEN_MALLOC_ALREADY_ALIGNED,
+              "msdeform: Eigen's alignment here differs from msdeform's libraries, which were compiled with "
+              MSD_ABI_FLAGS ". Compile this code with the same -march/-m flags and EIGEN_* defines, or rebuild "
+              "msdeform with yours (-DMSD_NATIVE=ON for -march=native, or -DCMAKE_CXX_FLAGS=...).");
 
 namespace msd {
 

@@ -1,6 +1,6 @@
 #include "msdeform/core/version.h"
 
-#include <Eigen/Core>
+#include "msdeform/core/types.h"
 
 namespace msd {
 
@@ -21,7 +21,8 @@ std::string build_info() {
 #endif
   return "sparse Cholesky " + cholesky + ", Eigen " + std::to_string(EIGEN_WORLD_VERSION) + "." +
          std::to_string(EIGEN_MAJOR_VERSION) + "." + std::to_string(EIGEN_MINOR_VERSION) + " (alignment " +
-         std::to_string(EIGEN_MAX_ALIGN_BYTES) + " bytes), compiled for " + isa;
+         std::to_string(EIGEN_MAX_STATIC_ALIGN_BYTES) + " bytes fixed-size, " + std::to_string(EIGEN_DEFAULT_ALIGN_BYTES) +
+         " heap), compiled for " + isa + " (" + MSD_ABI_FLAGS + ")";
 }
 
 }  // namespace msd

@@ -1,11 +1,14 @@
 #!/usr/bin/env bash
 # Installs the build tree into a scratch prefix and uses it as a tool would (ctest test install_and_examples):
 #   1. the layout: headers under include/msdeform/, the CMake package, libraries, the program (--version);
-#   2. examples/ configured against the package and run, built plainly and with -march=native (the library
-#      is built without it: Eigen's pinned alignment keeps the two compatible);
-#   3. a translation unit that includes msdeform with other Eigen alignment settings stops at compile time;
-#   4. add_subdirectory() of the source tree configures the libraries only (no tests or benchmarks);
-#   5. the README's first ```python block runs against the installed module.
+#   2. examples/ configured against the package, built and run with the library's own flags; built with
+#      -march=native too, where they must either run (the same Eigen settings) or stop at compile time
+#      with the message that names the fix;
+#   3. a program linking msdeform and another Eigen library (built with Eigen's defaults) frees the
+#      other library's blocks (msdeform forces no Eigen define on its users);
+#   4. a translation unit with other Eigen settings than the library's stops at compile time, naming them;
+#   5. add_subdirectory() of the source tree configures the libraries only (no tests or benchmarks);
+#   6. the README's first ```python block runs against the installed module.
 # Usage: check_install.sh SOURCE_DIR BUILD_DIR PYTHON   (PYTHON: ON when the build has the Python module)
 set -euo pipefail
 src="$1"
@@ -32,34 +35,54 @@ version=$(env -u LD_LIBRARY_PATH "$prefix/bin/msdeform" --version | head -1)
   fail "installed msdeform --version printed '$version'"
 say "installed $(find "$prefix" -type f | wc -l) files; $version"
 
-# 2. The examples against the package, without and with -march=native.
+# 2. The examples against the package: with the library's flags they must run; with -march=native they
+#    must run or stop with the ABI message (Eigen's settings under -march=native may differ from the
+#    library's: 32-byte alignment with AVX).
+abi_message="Eigen's alignment here differs from msdeform's libraries"
 for flavour in plain native; do
   flags=""
   [ "$flavour" = native ] && flags="-march=native"
   cmake -S "$src/examples" -B "$work/examples-$flavour" -G Ninja -DCMAKE_BUILD_TYPE=Release \
         -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_CXX_FLAGS="$flags" >"$work/examples-$flavour.log" 2>&1 ||
     { cat "$work/examples-$flavour.log"; fail "examples ($flavour) did not configure against the package"; }
-  cmake --build "$work/examples-$flavour" >>"$work/examples-$flavour.log" 2>&1 ||
-    { cat "$work/examples-$flavour.log"; fail "examples ($flavour) did not build"; }
-  (cd "$work/examples-$flavour" && ./one_edit && ./frame_loop) || fail "an example ($flavour) exited non-zero"
-  say "examples built ($flavour) and ran"
+  if cmake --build "$work/examples-$flavour" >>"$work/examples-$flavour.log" 2>&1; then
+    (cd "$work/examples-$flavour" && ./one_edit && ./frame_loop) || fail "an example ($flavour) exited non-zero"
+    say "examples built ($flavour) and ran"
+  elif [ "$flavour" = native ] && grep -q "$abi_message" "$work/examples-$flavour.log"; then
+    say "examples ($flavour) stopped at compile time with the ABI message (the library's Eigen settings differ)"
+  else
+    cat "$work/examples-$flavour.log"
+    fail "examples ($flavour) did not build"
+  fi
 done
 
-# 3. Other Eigen alignment settings are refused at compile time, naming the fix.
+# 3. A program that links msdeform and another Eigen library built with the defaults frees both's blocks.
+cmake -S "$src/tests/install/mixed" -B "$work/mixed" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+      -DCMAKE_PREFIX_PATH="$prefix" >"$work/mixed.log" 2>&1 && cmake --build "$work/mixed" >>"$work/mixed.log" 2>&1 ||
+  { cat "$work/mixed.log"; fail "the program mixing msdeform and another Eigen library did not build"; }
+"$work/mixed/mixed" || fail "the program mixing msdeform and another Eigen library crashed or failed"
+say "a program with msdeform and another Eigen library ran"
+
+# 4. Other Eigen settings than the library's are refused at compile time, naming the library's flags:
+#    an instruction set with another alignment, and an explicit EIGEN_MAX_ALIGN_BYTES.
+heap=$(sed -n 's/#define MSD_EIGEN_DEFAULT_ALIGN_BYTES \([0-9]*\)/\1/p' "$prefix/include/msdeform/config.h")
+[ -n "$heap" ] || fail "include/msdeform/config.h does not record Eigen's heap alignment"
+other_isa="-mavx"
+[ "$heap" = 16 ] || other_isa="-mno-avx"
 echo '#include <msdeform/core/types.h>
 int main() { return 0; }' >"$work/abi.cpp"
-for defines in "-DEIGEN_MAX_ALIGN_BYTES=32 -DEIGEN_MALLOC_ALREADY_ALIGNED=0" "-DEIGEN_MAX_ALIGN_BYTES=16"; do
-  # shellcheck disable=SC2086
-  if c++ -std=c++17 $defines -I"$prefix/include" -I/usr/include/eigen3 -c "$work/abi.cpp" -o "$work/abi.o" \
+for flags in "$other_isa" "-DEIGEN_MAX_ALIGN_BYTES=64"; do
+  if c++ -std=c++17 $flags -I"$prefix/include" -I/usr/include/eigen3 -c "$work/abi.cpp" -o "$work/abi.o" \
        2>"$work/abi.log"; then
-    fail "a translation unit with $defines compiled against msdeform"
+    fail "a translation unit with $flags compiled against msdeform (Eigen heap alignment $heap)"
   fi
-  grep -q "compile with EIGEN_MAX_ALIGN_BYTES=16 and EIGEN_MALLOC_ALREADY_ALIGNED=0" "$work/abi.log" ||
-    { cat "$work/abi.log"; fail "no clear alignment message for $defines"; }
+  grep -q "$abi_message" "$work/abi.log" || { cat "$work/abi.log"; fail "no clear Eigen settings message for $flags"; }
 done
-say "mismatched Eigen alignment settings stop at compile time with their fix"
+c++ -std=c++17 -I"$prefix/include" -I/usr/include/eigen3 -c "$work/abi.cpp" -o "$work/abi.o" 2>"$work/abi.log" ||
+  [ "$heap" != 16 ] || { cat "$work/abi.log"; fail "a plain translation unit did not compile against msdeform"; }
+say "other Eigen settings stop at compile time with their fix"
 
-# 4. add_subdirectory: the libraries only.
+# 5. add_subdirectory: the libraries only.
 mkdir -p "$work/sub"
 cat >"$work/sub/CMakeLists.txt" <<CMAKE
 cmake_minimum_required(VERSION 3.21)
@@ -76,7 +99,7 @@ done
 grep -q "libmsdeform_core" "$work/sub-build/build.ninja" || fail "add_subdirectory has no msdeform_core"
 say "add_subdirectory configures the libraries only"
 
-# 5. The README's Python example against the installed module (Debian's interpreter: it has numpy).
+# 6. The README's Python example against the installed module (Debian's interpreter: it has numpy).
 python=/usr/bin/python3
 if [ "$with_python" = ON ]; then
   site=$(ls -d "$prefix"/lib/python3*/dist-packages 2>/dev/null | head -1 || true)

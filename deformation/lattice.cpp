@@ -2,17 +2,24 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "msdeform/core/errors.h"
 
 namespace msd {
 
 LatticeDeformer::LatticeDeformer(LatticeOptions options) : options_(options) {
-  if ((options_.cells.array() < 0).any())
-    throw InvalidInput("lattice: cell counts must be positive (or all 0 to fit them)");
-  if (options_.cells_longest < 1) throw InvalidInput("lattice: cells_longest must be at least 1");
-  if (!(options_.margin >= 0) || !std::isfinite(options_.margin))
-    throw InvalidInput("lattice: the margin must be finite and >= 0");
+  const auto count = [](int c) { return std::to_string(c); };
+  const Eigen::Vector3i& c = options_.cells;
+  if ((c.array() < 0).any() || (c.array() > LatticeOptions::kMaxCells).any())
+    throw InvalidInput("lattice: cell counts must be in 1.." + count(LatticeOptions::kMaxCells) +
+                       " (or all 0 to fit them), got (" + count(c.x()) + ", " + count(c.y()) + ", " + count(c.z()) + ")");
+  if (options_.cells_longest < 1 || options_.cells_longest > LatticeOptions::kMaxCells)
+    throw InvalidInput("lattice: cells_longest must be in 1.." + count(LatticeOptions::kMaxCells) + ", got " +
+                       count(options_.cells_longest));
+  if (!(options_.margin >= 0 && options_.margin <= LatticeOptions::kMaxMargin))
+    throw InvalidInput("lattice: the margin must be in 0..10 (relative to the bounding-box diagonal), got " +
+                       std::to_string(options_.margin));
 }
 
 void LatticeDeformer::fit_basis(const Positions& P, const Region&) {

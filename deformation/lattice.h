@@ -11,11 +11,16 @@
 namespace msd {
 
 struct LatticeOptions {
-  //! Cells of the lattice along x, y, z; (0, 0, 0): fitted to the input's bounding box, with
-  //! `cells_longest` cells along its longest side and as many of the same size (at least one) along the others.
+  //! Most cells along one axis: (64 + 3)³ control points already take 2.4 MB per coordinate.
+  static constexpr int kMaxCells = 64;
+  //! Most margin (relative to the bounding-box diagonal).
+  static constexpr double kMaxMargin = 10;
+  //! Cells of the lattice along x, y, z, each in 1..kMaxCells; (0, 0, 0): fitted to the input's bounding
+  //! box, with `cells_longest` (1..kMaxCells) cells along its longest side and as many of the same size
+  //! (at least one) along the others.
   Eigen::Vector3i cells = Eigen::Vector3i::Zero();
   int cells_longest = 8;
-  //! Space left around the input's bounding box on every side, relative to its diagonal.
+  //! Space left around the input's bounding box on every side, relative to its diagonal, in 0..kMaxMargin.
   double margin = 0.05;
   LeastNormOptions least_norm;
 };

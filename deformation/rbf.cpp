@@ -18,7 +18,9 @@ struct RbfDeformer::Factor {
 };
 
 RbfDeformer::RbfDeformer(RbfOptions options) : options_(options) {
-  if (options_.max_centres < 1) throw InvalidInput("rbf: max_centres must be at least 1");
+  if (options_.max_centres < 1 || options_.max_centres > RbfOptions::kMaxCentres)
+    throw InvalidInput("rbf: max_centres must be in 1.." + std::to_string(RbfOptions::kMaxCentres) + ", got " +
+                       std::to_string(options_.max_centres));
 }
 
 void RbfDeformer::fit_basis(const Positions& P, const Region& region) {

@@ -174,12 +174,12 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   scoped_options.push_back({space->add_option("--lattice-cells", settings.lattice.cells_longest,
                                               "lattice: cells along the longest side of the box (the others get cells "
                                               "of the same size)")
-                                ->check(CLI::Range(1, 64))
+                                ->check(CLI::Range(1, LatticeOptions::kMaxCells))
                                 ->capture_default_str(),
                             {"lattice"}});
   scoped_options.push_back({space->add_option("--lattice-margin", settings.lattice.margin,
                                               "lattice: space around the input's box on each side, relative to its diagonal")
-                                ->check(CLI::Range(0.0, 10.0))
+                                ->check(CLI::Range(0.0, LatticeOptions::kMaxMargin))
                                 ->capture_default_str(),
                             {"lattice"}});
   const std::vector<std::string> cages = {"cage-mvc", "cage-harmonic"};
@@ -197,7 +197,7 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   scoped_options.push_back({space->add_option("--cage-subdivisions", settings.cage.subdivisions,
                                               "cage-*, generated cage: midpoint subdivisions of the 26-DOP (each "
                                               "quadruples its triangles: more control vertices)")
-                                ->check(CLI::Range(0, 3))
+                                ->check(CLI::Range(0, 4))
                                 ->capture_default_str(),
                             cages});
   scoped_options.push_back({space->add_option("--harmonic-resolution", settings.cage.harmonic_resolution,
@@ -209,7 +209,7 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   scoped_options.push_back({space->add_option("--max-centres", settings.rbf.max_centres,
                                               "rbf: most centres; more constrained vertices are subsampled by "
                                               "farthest-point sampling (O(n^3) factorisation)")
-                                ->check(CLI::Range(1, 20000))
+                                ->check(CLI::Range(1, RbfOptions::kMaxCentres))
                                 ->capture_default_str(),
                             {"rbf"}});
   auto* ms = cmd.add_option_group("multiscale", "multiscale: decompose, deform the base, add the details back (9.3)");

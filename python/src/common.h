@@ -44,9 +44,9 @@ void require_file(const std::string& path);
 // FileNotFoundError / NotADirectoryError / PermissionError unless path's folder exists and is writable.
 void require_writable(const std::string& path);
 
-// (N, 3) numeric array-like -> Positions (a copy). rows >= 0: N must equal it. \throw TypeError for a
+// (N, 3) numeric array-like -> Positions (a copy). rows >= 0: N must equal it (one per `per`). \throw TypeError for a
 // non-numeric dtype, ValueError for another shape or a non-finite value.
-msd::Positions to_positions(py::handle obj, const char* what, long rows = -1);
+msd::Positions to_positions(py::handle obj, const char* what, long rows = -1, const char* per = "vertex");
 // (F, 3) integer array-like (None or an empty array: no faces) -> Faces (a copy). num_vertices >= 0:
 // every index must be in [0, num_vertices). \throw TypeError for a non-integer dtype, ValueError for
 // another shape or an index out of range.

@@ -196,7 +196,16 @@ const std::vector<Option>& options_table() {
                [](MethodSettings& s, const std::string&, py::handle v) {
                  if (!py::isinstance<py::str>(v) && PyCallable_Check(v.ptr())) {
                    s.propagation.transfer = msd::PropagationTransfer::Custom;
-                   s.propagation.custom_transfer = v.cast<std::function<double(double)>>();
+                   // pybind11's wrapper holds the GIL around each call; a result that is no number is
+                   // a TypeError naming the option rather than pybind11's generic cast error.
+                   s.propagation.custom_transfer = [f = v.cast<std::function<double(double)>>()](double x) {
+                     try {
+                       return f(x);
+                     } catch (const py::cast_error&) {
+                       throw py::type_error("option transfer: the callable must return a number, t(" +
+                                            std::to_string(x) + ") did not");
+                     }
+                   };
                  } else {
                    s.propagation.transfer = choice_value(v, "transfer", kTransfers);
                    s.propagation.custom_transfer = nullptr;
@@ -504,6 +513,17 @@ class Busy {
   std::atomic<bool>& flag_;
 };
 
+// The Deformer behind a Python object. Deformer.__new__(Deformer) alone makes an object whose C++ part
+// was never constructed (pybind11 would hand out uninitialised memory): that is a TypeError here.
+PyDeformer& live(py::handle obj) {
+  auto* inst = reinterpret_cast<py::detail::instance*>(obj.ptr());
+  py::detail::value_and_holder v_h = inst->get_value_and_holder(py::detail::get_type_info(typeid(PyDeformer)));
+  if (!v_h.holder_constructed())
+    throw py::type_error("this Deformer was made without __init__ (Deformer.__new__): create it as "
+                         "msdeform.Deformer(name, **options)");
+  return *static_cast<PyDeformer*>(v_h.value_ptr());
+}
+
 PyDeformer::PyDeformer(const std::string& name, const py::kwargs& options) : method(name) {
   const msd::Catalogue& catalogue = msd::builtin_methods();
   catalogue.find(method);  // InvalidInput (a ValueError) for an unknown name, listing the known ones
@@ -663,7 +683,8 @@ void bind_deformer(py::module_& m) {
            py::arg("name"))
       .def(
           "prepare",
-          [](PyDeformer& self, PositionsArg V, FacesArg F, LabelsArg labels) {
+          [](py::handle obj, PositionsArg V, FacesArg F, LabelsArg labels) {
+            PyDeformer& self = live(obj);
             const msd::Positions P = to_positions(V, "V");
             const msd::Faces T = to_faces(F, "F", static_cast<long>(P.rows()));
             std::vector<int> codes = to_codes(labels, "labels", static_cast<long>(P.rows()));
@@ -691,7 +712,8 @@ data; msdeform.TopologyError (ValueError) for a non-manifold mesh or a free part
 constrained vertex; msdeform.SolverError (RuntimeError) when a factorisation fails.)doc")
       .def(
           "deform",
-          [](PyDeformer& self, TransformsArg transforms) {
+          [](py::handle obj, TransformsArg transforms) {
+            PyDeformer& self = live(obj);
             const std::vector<msd::Mat4> T = to_transforms(transforms);
             if (self.deformer->prepared() && static_cast<int>(T.size()) != self.deformer->num_handles())
               throw py::value_error(self.deformer->name() + ": " + std::to_string(T.size()) +
@@ -716,9 +738,10 @@ non-finite or non-affine matrix (last row not 0 0 0 1), msdeform.UsageError (Run
 prepare(), msdeform.SolverError (RuntimeError) naming the vertex if the result is not finite.)doc")
       .def(
           "deform_to",
-          [](PyDeformer& self, PositionsArg targets) {
+          [](py::handle obj, PositionsArg targets) {
+            PyDeformer& self = live(obj);
             const bool check = self.deformer->prepared() && self.deformer->traits().vertex_targets;
-            const msd::Positions X = to_positions(targets, "targets", check ? self.num_constrained : -1);
+            const msd::Positions X = to_positions(targets, "targets", check ? self.num_constrained : -1, "constrained vertex");
             msd::Positions out;
             {
               Busy busy(self);
@@ -735,7 +758,8 @@ ascending index order (msdeform.constrained_vertices(labels)), fixed ones usuall
 msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other than #C.)doc")
       .def(
           "set_initial_guess",
-          [](PyDeformer& self, PositionsArg X) {
+          [](py::handle obj, PositionsArg X) {
+            PyDeformer& self = live(obj);
             const msd::Positions G =
                 to_positions(X, "X", self.deformer->prepared() ? self.deformer->num_vertices() : -1);
             Busy busy(self);
@@ -747,7 +771,8 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
           "prepare(), ValueError for a wrong shape or a non-finite value.")
       .def(
           "reset",
-          [](PyDeformer& self) {
+          [](py::handle obj) {
+            PyDeformer& self = live(obj);
             Busy busy(self);
             self.deformer->reset();
           },
@@ -755,7 +780,8 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
           "identity, the frame report is cleared; factorisations are kept.")
       .def(
           "evaluate",
-          [](PyDeformer& self, PositionsArg points) {
+          [](py::handle obj, PositionsArg points) {
+            PyDeformer& self = live(obj);
             const msd::Positions X = to_positions(points, "points");
             msd::Positions out;
             {
@@ -770,13 +796,14 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
           "applied to any points ((N, 3) float64, copied); returns (N, 3) float64. Raises msdeform.UsageError "
           "(RuntimeError) for a surface method or before prepare().")
       .def_property_readonly(
-          "name", [](const PyDeformer& self) { return self.deformer->name(); }, "the method's catalogue name")
+          "name", [](py::handle obj) { return live(obj).deformer->name(); }, "the method's catalogue name")
       .def_property_readonly(
-          "traits", [](const PyDeformer& self) { return self.deformer->traits(); },
+          "traits", [](py::handle obj) { return live(obj).deformer->traits(); },
           "DeformerTraits: domain, solve, vertex_targets, initial_guess, exact_constraints, reproduces_rigid_motions")
       .def_property_readonly(
           "frame_report",
-          [](PyDeformer& self) {
+          [](py::handle obj) {
+            PyDeformer& self = live(obj);
             Busy busy(self);
             return msd::FrameReport(self.deformer->frame_report());
           },
@@ -784,22 +811,24 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
           "constraint_error, warnings")
       .def_property_readonly(
           "prepare_warnings",
-          [](PyDeformer& self) {
+          [](py::handle obj) {
+            PyDeformer& self = live(obj);
             Busy busy(self);
             return self.deformer->prepare_warnings();
           },
           "what prepare() found that the user should know, each naming a remedy (a list of str)")
       .def_property_readonly(
-          "prepared", [](const PyDeformer& self) { return self.deformer->prepared(); }, "whether prepare() succeeded")
+          "prepared", [](py::handle obj) { return live(obj).deformer->prepared(); }, "whether prepare() succeeded")
       .def_property_readonly(
-          "num_vertices", [](const PyDeformer& self) { return self.deformer->num_vertices(); },
+          "num_vertices", [](py::handle obj) { return live(obj).deformer->num_vertices(); },
           "#V of the prepared shape (0 before prepare)")
       .def_property_readonly(
-          "num_handles", [](const PyDeformer& self) { return self.deformer->num_handles(); },
+          "num_handles", [](py::handle obj) { return live(obj).deformer->num_handles(); },
           "handles of the prepared region (0 before prepare)")
       .def_property_readonly(
           "options",
-          [](const PyDeformer& self) {
+          [](py::handle obj) {
+            PyDeformer& self = live(obj);
             py::dict d;
             for (const Option& o : options_table())
               if (const std::string* g = matching_group(o, self.groups)) d[py::str(o.name)] = o.get(self.settings, *g);
@@ -808,7 +837,8 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
           "the values of every option this method reads (a dict; defaults where none was given)")
       .def_property_readonly(
           "base",
-          [](PyDeformer& self) -> py::object {
+          [](py::handle obj) -> py::object {
+            PyDeformer& self = live(obj);
             const auto* ms = dynamic_cast<const msd::MultiscaleDeformer*>(self.deformer.get());
             if (!ms || !self.deformer->prepared()) return py::none();
             Busy busy(self);
@@ -818,14 +848,16 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
           "else None")
       .def_property_readonly(
           "detail_scale",
-          [](PyDeformer& self) -> py::object {
+          [](py::handle obj) -> py::object {
+            PyDeformer& self = live(obj);
             const auto* ms = dynamic_cast<const msd::MultiscaleDeformer*>(self.deformer.get());
             if (!ms || !self.deformer->prepared()) return py::none();
             return py::float_(ms->decomposition_report().low_pass.detail_scale);
           },
           "multiscale methods after prepare(): the detail scale used (mesh units; 0: no detail layer, B = S); "
           "else None")
-      .def("__repr__", [](const PyDeformer& self) {
+      .def("__repr__", [](py::handle obj) {
+        PyDeformer& self = live(obj);
         std::string s = "Deformer('" + self.method + "'";
         for (const std::string& k : self.given)
           if (const Option* o = find_option(k))

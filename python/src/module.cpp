@@ -161,7 +161,7 @@ void require_writable(const std::string& path) {
   if (::access(folder.c_str(), W_OK | X_OK) != 0) raise_os_error(EACCES, folder);
 }
 
-msd::Positions to_positions(py::handle obj, const char* what, long rows) {
+msd::Positions to_positions(py::handle obj, const char* what, long rows, const char* per) {
   const std::string name = what;
   py::array a = as_array(obj, name, "an (N, 3) float64 array");
   if (!is_number_kind(a.dtype().kind()))
@@ -171,7 +171,7 @@ msd::Positions to_positions(py::handle obj, const char* what, long rows) {
     throw py::value_error(name + " must have shape (N, 3), got shape " + shape_of(a));
   if (rows >= 0 && a.shape(0) != rows)
     throw py::value_error(name + " has " + std::to_string(a.shape(0)) + " rows, expected " + std::to_string(rows) +
-                          " (one per vertex)");
+                          " (one per " + per + ")");
   auto d = py::array_t<double, py::array::forcecast>::ensure(a);
   if (!d) throw py::error_already_set();
   const auto u = d.unchecked<2>();

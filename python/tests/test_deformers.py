@@ -144,6 +144,8 @@ def test_a_python_transfer_function(lift):
     assert (b[free, 2] - lift.V[free, 2]).mean() < (a[free, 2] - lift.V[free, 2]).mean()  # s^2 <= s
     with pytest.raises(ZeroDivisionError):
         msdeform.Deformer("propagate", transfer=lambda s: 1 / 0).prepare(lift.V, lift.F, lift.labels)
+    with pytest.raises(TypeError, match=r"option transfer: the callable must return a number"):
+        msdeform.Deformer("propagate", transfer=lambda s: "half").prepare(lift.V, lift.F, lift.labels)
 
 
 def test_unknown_method_and_options_are_refused_by_name():
@@ -166,8 +168,23 @@ def test_unknown_method_and_options_are_refused_by_name():
         msdeform.Deformer("multiscale-normal", base_method="multiscale-vectors")
     with pytest.raises(msdeform.InvalidInput):  # the library's own check of the value
         msdeform.Deformer("arap", iterations=0)
+    # Sizes that would exhaust memory are refused by the library, for Python as for the command line.
+    with pytest.raises(msdeform.InvalidInput, match=r"cells_longest must be in 1\.\.64, got 3000"):
+        msdeform.Deformer("lattice", cells=3000)
+    with pytest.raises(msdeform.InvalidInput, match=r"cell counts must be in 1\.\.64"):
+        msdeform.Deformer("lattice", cells=(4, 1000, 4))
+    with pytest.raises(msdeform.InvalidInput, match=r"max_centres must be in 1\.\.20000"):
+        msdeform.Deformer("rbf", max_centres=10**6)
     with pytest.raises(ValueError, match="control applies to base='subdivision'"):
         msdeform.Deformer("multiscale-normal", control=msdeform.scene("lift", 100).control)
+
+
+def test_a_deformer_made_without_init_is_refused():
+    d = msdeform.Deformer.__new__(msdeform.Deformer)  # no C++ object behind it
+    with pytest.raises(TypeError, match="made without __init__"):
+        d.prepare(np.zeros((3, 3)), np.array([[0, 1, 2]], dtype=np.int32), np.array([0, 1, 2], dtype=np.int32))
+    with pytest.raises(TypeError, match="made without __init__"):
+        d.name
 
 
 def test_frame_errors(lift, prepared):
@@ -223,7 +240,7 @@ def test_deform_to_matches_affine_targets(lift, prepared):
     handle = labels[c] == 2
     targets[handle] = targets[handle] @ transforms[0][:3, :3].T + transforms[0][:3, 3]
     np.testing.assert_allclose(d.deform_to(targets), d.deform(transforms), rtol=0, atol=1e-10)
-    with pytest.raises(ValueError, match=f"has {len(c) - 1} rows, expected {len(c)}"):
+    with pytest.raises(ValueError, match=rf"has {len(c) - 1} rows, expected {len(c)} \(one per constrained vertex\)"):
         d.deform_to(targets[:-1])
     with pytest.raises(msdeform.UsageError, match="not per-vertex targets"):
         prepared("propagate").deform_to(targets)

@@ -136,6 +136,26 @@ TEST_CASE("lattice: control-point editing, linear precision and clamping outside
   CHECK_THROWS_AS(LatticeDeformer(partial).prepare(s.P, s.F, s.region), InvalidInput);
 }
 
+TEST_CASE("lattice, rbf: sizes that would exhaust memory are refused when the method is made", "[space][errors]") {
+  LatticeOptions lattice;
+  lattice.cells_longest = 3000;
+  CHECK_THROWS_AS(LatticeDeformer(lattice), InvalidInput);
+  CHECK_THROWS_WITH(LatticeDeformer(lattice), Catch::Matchers::Contains("cells_longest must be in 1..64"));
+  lattice.cells_longest = 64;
+  CHECK_NOTHROW(LatticeDeformer(lattice));
+  lattice.cells = {4, 1000, 4};
+  CHECK_THROWS_AS(LatticeDeformer(lattice), InvalidInput);
+  CHECK_THROWS_WITH(LatticeDeformer(lattice), Catch::Matchers::Contains("cell counts must be in 1..64"));
+  lattice.cells = {4, 4, 4};
+  lattice.margin = 1e9;
+  CHECK_THROWS_AS(LatticeDeformer(lattice), InvalidInput);
+  CHECK_THROWS_WITH(LatticeDeformer(lattice), Catch::Matchers::Contains("margin must be in 0..10"));
+  RbfOptions rbf;
+  rbf.max_centres = 1000000;
+  CHECK_THROWS_AS(RbfDeformer(rbf), InvalidInput);
+  CHECK_THROWS_WITH(RbfDeformer(rbf), Catch::Matchers::Contains("max_centres must be in 1..20000"));
+}
+
 TEST_CASE("rbf: interpolates every constraint and subsamples beyond max_centres", "[space][rbf]") {
   const Scene& s = test::bent_bar();
   const double diag = bounding_box_diagonal(s.P);

@@ -4,7 +4,9 @@
 # Eigen derives from the instruction set (-march, -mavx, ...) and from EIGEN_* defines:
 #   - the alignment, hence the layout, of fixed-size types (Matrix4d: 16 bytes with SSE2, 32 with AVX);
 #   - the alignment that code assumes of heap arrays, and how it allocates and frees them (malloc at
-#     16 bytes; above that hand-aligned blocks freed through a pointer stored before them).
+#     16 bytes; above that, or under AddressSanitizer, hand-aligned blocks freed through a pointer
+#     stored before them);
+#   - the size of Eigen::Index (EIGEN_DEFAULT_DENSE_INDEX_TYPE), in which dynamic matrices store their size.
 # Two sides that disagree on any of these exchange objects that one of them misreads or frees wrongly:
 # the symptom is a correct result and then "double free or corruption". msdeform forces no Eigen define
 # on its users (that would break their other Eigen libraries); it requires the same settings instead.
@@ -26,6 +28,7 @@ list(GET _msd_abi_out 1 MSD_EIGEN_MAX_ALIGN_BYTES)
 list(GET _msd_abi_out 2 MSD_EIGEN_DEFAULT_ALIGN_BYTES)
 list(GET _msd_abi_out 3 MSD_EIGEN_MALLOC_ALREADY_ALIGNED)
 list(GET _msd_abi_out 4 MSD_EIGEN_VERSION)
+list(GET _msd_abi_out 5 MSD_EIGEN_INDEX_BYTES)
 # What a user has to match, in words for the error message: the flags that move these settings.
 string(STRIP "${CMAKE_CXX_FLAGS} ${_msd_abi_flags}" MSD_ABI_FLAGS)
 string(REGEX MATCHALL "(-march=|-mavx|-msse|-mfma|-mno-|-D *EIGEN_)[^ ]*" MSD_ABI_FLAGS "${MSD_ABI_FLAGS}")

@@ -64,19 +64,26 @@ cmake -S "$src/tests/install/mixed" -B "$work/mixed" -G Ninja -DCMAKE_BUILD_TYPE
 say "a program with msdeform and another Eigen library ran"
 
 # 4. Other Eigen settings than the library's are refused at compile time, naming the library's flags:
-#    an instruction set with another alignment, and an explicit EIGEN_MAX_ALIGN_BYTES.
+#    an instruction set with another alignment, an explicit EIGEN_MAX_ALIGN_BYTES, another index type,
+#    and AddressSanitizer (under which Eigen aligns heap blocks by hand).
 heap=$(sed -n 's/#define MSD_EIGEN_DEFAULT_ALIGN_BYTES \([0-9]*\)/\1/p' "$prefix/include/msdeform/config.h")
 [ -n "$heap" ] || fail "include/msdeform/config.h does not record Eigen's heap alignment"
 other_isa="-mavx"
 [ "$heap" = 16 ] || other_isa="-mno-avx"
 echo '#include <msdeform/core/types.h>
 int main() { return 0; }' >"$work/abi.cpp"
-for flags in "$other_isa" "-DEIGEN_MAX_ALIGN_BYTES=64"; do
+# flags|the message expected (a 4-byte Eigen::Index compiled and linked, then crashed in a destructor)
+cases=("$other_isa|$abi_message" "-DEIGEN_MAX_ALIGN_BYTES=64|$abi_message"
+       "-DEIGEN_DEFAULT_DENSE_INDEX_TYPE=int|Eigen's index type here differs")
+[ "$heap" = 16 ] && cases+=("-fsanitize=address|add -DEIGEN_MALLOC_ALREADY_ALIGNED=1")  # malloc-allocating library
+for case in "${cases[@]}"; do
+  flags="${case%%|*}"
+  expected="${case#*|}"
   if c++ -std=c++17 $flags -I"$prefix/include" -I/usr/include/eigen3 -c "$work/abi.cpp" -o "$work/abi.o" \
        2>"$work/abi.log"; then
     fail "a translation unit with $flags compiled against msdeform (Eigen heap alignment $heap)"
   fi
-  grep -q "$abi_message" "$work/abi.log" || { cat "$work/abi.log"; fail "no clear Eigen settings message for $flags"; }
+  grep -qF "$expected" "$work/abi.log" || { cat "$work/abi.log"; fail "no clear Eigen settings message for $flags"; }
 done
 c++ -std=c++17 -I"$prefix/include" -I/usr/include/eigen3 -c "$work/abi.cpp" -o "$work/abi.o" 2>"$work/abi.log" ||
   [ "$heap" != 16 ] || { cat "$work/abi.log"; fail "a plain translation unit did not compile against msdeform"; }

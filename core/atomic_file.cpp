@@ -1,22 +1,45 @@
 #include "msdeform/core/atomic_file.h"
 
 #include <fcntl.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 #include <vector>
 
 #include "msdeform/core/errors.h"
 
 namespace msd {
 
+void check_writable(const std::string& path, const char* who) {
+  const auto fail = [&](const std::string& what) {
+    throw InvalidInput(std::string(who) + " " + path + ": " + what + "; nothing was computed");
+  };
+  if (path.empty()) fail("empty output path");
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) {
+    if (S_ISDIR(st.st_mode)) fail("is a folder");
+    // The mode bits too: root may write anything, but a file nobody may write is meant to stay.
+    if (::access(path.c_str(), W_OK) != 0 || (st.st_mode & 0222) == 0) fail("is read-only (it is not replaced)");
+  } else if (errno != ENOENT) {
+    fail(std::strerror(errno));
+  }
+  const size_t slash = path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+  if (::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) fail("its folder " + dir + " does not exist");
+  if (::access(dir.c_str(), W_OK) != 0) fail("its folder " + dir + " is not writable");
+  const std::string name = path.substr(slash == std::string::npos ? 0 : slash + 1);
+  if (name.size() > 255) fail("the file name is longer than 255 bytes");
+}
+
 void write_file_atomically(const std::string& path, std::string_view content) {
-  std::string tmpl = path + ".tmp-XXXXXX";
+  // The temporary file is a short hidden name in the same folder (rename needs one file system), so a
+  // legal name of up to 255 bytes stays legal.
+  const size_t slash = path.find_last_of('/');
+  std::string tmpl = (slash == std::string::npos ? std::string() : path.substr(0, slash + 1)) + ".msd-XXXXXX";
   std::vector<char> name(tmpl.begin(), tmpl.end());
   name.push_back('\0');
   const int fd = mkstemp(name.data());
@@ -48,13 +71,69 @@ void write_file_atomically(const std::string& path, std::string_view content) {
   }
 }
 
-std::string read_file(const std::string& path, const char* who) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InvalidInput(std::string(who) + ": cannot open " + path + ": " + std::strerror(errno));
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw InvalidInput(std::string(who) + ": error while reading " + path);
-  return std::move(ss).str();
+FileText::FileText(const std::string& path, const char* who) {
+  const auto fail = [&](const std::string& what) { throw InvalidInput(std::string(who) + ": " + path + ": " + what); };
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) fail(std::string("cannot open it: ") + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    const int err = errno;
+    ::close(fd);
+    fail(std::string("cannot read it: ") + std::strerror(err));
+  }
+  if (S_ISDIR(st.st_mode)) {
+    ::close(fd);
+    fail("is a folder, not a file");
+  }
+  if (S_ISREG(st.st_mode) && st.st_size > 0) {
+    map_size_ = static_cast<size_t>(st.st_size);
+    map_ = ::mmap(nullptr, map_size_, PROT_READ, MAP_PRIVATE, fd, 0);
+    const int err = errno;
+    ::close(fd);
+    if (map_ == MAP_FAILED) {
+      map_ = nullptr;
+      fail(std::string("cannot map it: ") + std::strerror(err));
+    }
+    ::madvise(map_, map_size_, MADV_SEQUENTIAL);
+    text_ = std::string_view(static_cast<const char*>(map_), map_size_);
+  } else {  // empty, or a pipe or device: read what comes
+    char buffer[1 << 16];
+    while (true) {
+      const ssize_t n = ::read(fd, buffer, sizeof buffer);
+      if (n == 0) break;
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        const int err = errno;
+        ::close(fd);
+        fail(std::string("error while reading it: ") + std::strerror(err));
+      }
+      copy_.append(buffer, static_cast<size_t>(n));
+    }
+    ::close(fd);
+    text_ = copy_;
+  }
+  if (text_.substr(0, 3) == "\xEF\xBB\xBF") text_.remove_prefix(3);  // a UTF-8 byte-order mark
 }
+
+FileText::~FileText() {
+  if (map_) ::munmap(map_, map_size_);
+}
+
+std::string printable(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u >= 32 && u < 127) {
+      out += c;
+    } else {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02X", u);
+      out += hex;
+    }
+  }
+  return out;
+}
+
+std::string read_file(const std::string& path, const char* who) { return std::string(FileText(path, who).text()); }
 
 }  // namespace msd

@@ -1,6 +1,6 @@
 #pragma once
 //! \file Writing files so that a failed or interrupted run never leaves a truncated output behind and
-//! never clobbers what was there before.
+//! never clobbers what was there before; reading them so that a bad file costs what was read of it.
 
 #include <string>
 #include <string_view>
@@ -12,7 +12,36 @@ namespace msd {
 //! fills up; path is then untouched.
 void write_file_atomically(const std::string& path, std::string_view content);
 
-//! Reads a whole file. \throw InvalidInput naming the path if it cannot be opened or read.
+//! Checks, before any work, that path can be written: its folder exists and is writable, and path is
+//! not a folder or a read-only file (which write_file_atomically would replace). \throw InvalidInput
+//! naming who (e.g. "-o") and the path.
+void check_writable(const std::string& path, const char* who);
+
+//! A file's bytes, mapped read-only: pages are read from disk as a reader touches them, so a reader that
+//! stops at a bad first line of a 1 GB file costs that line, not the file. Non-regular files (pipes,
+//! devices) are read whole instead. \throw InvalidInput naming the path if it does not exist, is a
+//! folder, or cannot be opened or read.
+class FileText {
+ public:
+  FileText(const std::string& path, const char* who);
+  ~FileText();
+  FileText(const FileText&) = delete;
+  FileText& operator=(const FileText&) = delete;
+  //! The bytes, without a leading UTF-8 byte-order mark.
+  std::string_view text() const { return text_; }
+
+ private:
+  void* map_ = nullptr;
+  size_t map_size_ = 0;
+  std::string copy_;  // non-regular files
+  std::string_view text_;
+};
+
+//! text as it can be shown in a message: bytes outside printable ASCII as \xHH (a byte-order mark or
+//! binary data would otherwise be invisible or garble the terminal).
+std::string printable(std::string_view text);
+
+//! Reads a whole file into memory (FileText(path, who).text(), copied).
 std::string read_file(const std::string& path, const char* who);
 
 }  // namespace msd

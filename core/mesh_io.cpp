@@ -27,7 +27,7 @@ struct FileContents {
   std::vector<int> corners, offsets{0}, lines;
 };
 
-// Splits text into lines with '#' comments stripped, numbering them from 1.
+// Splits text into lines with '#' comments stripped, numbering them from 1. Lines end in LF, CR LF or CR.
 class LineReader {
  public:
   // who: the public function reading, named in messages
@@ -36,10 +36,10 @@ class LineReader {
   // Next line that has content; false at the end of the text.
   bool next(std::string_view& line) {
     while (pos_ < text_.size()) {
-      size_t end = text_.find('\n', pos_);
+      size_t end = text_.find_first_of("\r\n", pos_);
       if (end == std::string_view::npos) end = text_.size();
       line = text_.substr(pos_, end - pos_);
-      pos_ = end + 1;
+      pos_ = end + (text_.substr(end, 2) == "\r\n" ? 2 : 1);
       ++number_;
       if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
       while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.remove_suffix(1);
@@ -49,6 +49,8 @@ class LineReader {
     return false;
   }
   int number() const { return number_; }
+  // Bytes after the current line.
+  size_t bytes_left() const { return pos_ < text_.size() ? text_.size() - pos_ : 0; }
   [[noreturn]] void fail(const std::string& what) const {
     throw InvalidInput(who_ + ": " + path_ + " line " + std::to_string(number_) + ": " + what);
   }
@@ -79,7 +81,7 @@ T parse_number(std::string_view tok, const LineReader& reader, const char* what)
   if (*first == '+') ++first;
   auto [ptr, ec] = std::from_chars(first, tok.data() + tok.size(), value);
   if (ec != std::errc() || ptr != tok.data() + tok.size())
-    reader.fail(std::string("expected ") + what + ", found '" + std::string(tok.substr(0, 40)) + "'");
+    reader.fail(std::string("expected ") + what + ", found '" + printable(tok.substr(0, 40)) + "'");
   return value;
 }
 
@@ -90,30 +92,63 @@ Vec3 parse_point(std::string_view& line, const LineReader& reader) {
   return p;
 }
 
+// The next token of a record: records that a writer wrapped continue on the following lines.
+std::string_view record_token(LineReader& reader, std::string_view& line) {
+  std::string_view tok = next_token(line);
+  while (tok.empty() && reader.next(line)) tok = next_token(line);
+  return tok;
+}
+
 FileContents read_off(std::string_view text, const std::string& path, const std::string& who) {
   LineReader reader(text, path, who);
   std::string_view line;
   if (!reader.next(line)) throw InvalidInput(who + ": " + path + " is empty");
   std::string_view head = next_token(line);
-  // OFF, COFF, NOFF, CNOFF, STOFF ...: the header ends in "OFF"; "OFF BINARY" is not supported.
-  if (head.size() < 3 || head.substr(head.size() - 3) != "OFF" || head.size() > 6)
-    reader.fail("not an OFF file: the first line must start with 'OFF'");
+  // OFF, COFF, NOFF, CNOFF, STOFF, 4OFF, nOFF ...: a prefix of at most 3 letters, then "OFF". Some
+  // writers (ModelNet) glue the vertex count to it: "OFF8 6 0".
+  const size_t off = head.find("OFF");
+  if (off == std::string_view::npos || off > 3)
+    reader.fail("not an OFF file: the first line must start with 'OFF' (or COFF, NOFF, ...), found '" +
+                printable(head.substr(0, 40)) + "'");
+  std::string_view glued = head.substr(off + 3);
+  if (!glued.empty() && !std::isdigit(static_cast<unsigned char>(glued[0])))
+    reader.fail("not an OFF file: the header '" + printable(head.substr(0, 40)) + "' is not OFF followed by counts");
   if (!line.empty() && line.find("BINARY") != std::string_view::npos) reader.fail("binary OFF is not supported");
-  if (line.empty() && !reader.next(line)) reader.fail("missing vertex and face counts");
-  const long nv = parse_number<long>(next_token(line), reader, "the vertex count");
+  if (glued.empty() && line.empty() && !reader.next(line)) reader.fail("missing vertex and face counts");
+  const long nv = parse_number<long>(glued.empty() ? next_token(line) : glued, reader, "the vertex count");
   const long nf = parse_number<long>(next_token(line), reader, "the face count");
   if (nv < 0 || nf < 0) reader.fail("negative vertex or face count");
+  // A vertex takes at least 6 bytes ("0 0 0\n"), a face at least 8 ("3 0 1 2\n"); the last line may lack its
+  // newline. Counts the rest of the file cannot hold are refused before anything is allocated.
+  const size_t left = reader.bytes_left() + 1;
+  if (static_cast<unsigned long>(nv) > left / 6 || static_cast<unsigned long>(nf) > left / 8 ||
+      6 * static_cast<unsigned long>(nv) + 8 * static_cast<unsigned long>(nf) > left)
+    reader.fail("the header declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
+                " faces, but only " + std::to_string(left - 1) + " bytes follow");
   FileContents soup;
-  soup.points.reserve(std::min(nv, 1L << 26));
+  soup.points.reserve(static_cast<size_t>(nv));
+  int extra_line = 0;  // a vertex line with more than three numbers (colours, or vertices that share lines)
   for (long i = 0; i < nv; ++i) {
-    if (!reader.next(line)) reader.fail("file ends after " + std::to_string(i) + " of " + std::to_string(nv) + " vertices");
-    soup.points.push_back(parse_point(line, reader));
+    if (!reader.next(line)) {
+      std::string why;
+      if (extra_line > 0)
+        why = " (line " + std::to_string(extra_line) + " has more than three numbers: one vertex per line is "
+              "read, the rest of a line as its colour or normal)";
+      reader.fail("file ends after " + std::to_string(i) + " of " + std::to_string(nv) + " vertices" + why);
+    }
+    Vec3 p;
+    for (int k = 0; k < 3; ++k) p[k] = parse_number<double>(record_token(reader, line), reader, "a coordinate");
+    if (!p.allFinite()) reader.fail("vertex has a non-finite coordinate (NaN or inf)");
+    if (extra_line == 0 && !next_token(line).empty()) extra_line = reader.number();
+    soup.points.push_back(p);
   }
   for (long f = 0; f < nf; ++f) {
     if (!reader.next(line)) reader.fail("file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
     const long n = parse_number<long>(next_token(line), reader, "a face corner count");
     if (n < 3) reader.fail("face " + std::to_string(f) + " has " + std::to_string(n) + " corners (at least 3 needed)");
-    for (long k = 0; k < n; ++k) soup.corners.push_back(parse_number<int>(next_token(line), reader, "a vertex index"));
+    if (static_cast<unsigned long>(n) > reader.bytes_left() + line.size())
+      reader.fail("face " + std::to_string(f) + " has " + std::to_string(n) + " corners, more than the file holds");
+    for (long k = 0; k < n; ++k) soup.corners.push_back(parse_number<int>(record_token(reader, line), reader, "a vertex index"));
     soup.offsets.push_back(static_cast<int>(soup.corners.size()));
     soup.lines.push_back(reader.number());
   }
@@ -142,7 +177,12 @@ FileContents read_obj(std::string_view text, const std::string& path, const std:
       soup.offsets.push_back(static_cast<int>(soup.corners.size()));
       soup.lines.push_back(reader.number());
     }
-    // vt, vn, g, o, s, usemtl, mtllib, l ...: not geometry we use.
+    // vt, vn, g, o, s, usemtl, mtllib, l ...: not geometry we use. A statement that is not a word is
+    // not OBJ (binary data, another format): stop at it rather than skip the whole file.
+    else if (key.size() > 16 || !std::all_of(key.begin(), key.end(), [](char c) {
+               return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+             }))
+      reader.fail("not an OBJ statement: '" + printable(key.substr(0, 40)) + "'");
   }
   return soup;
 }
@@ -158,6 +198,7 @@ class PlyReader {
     parse_header();
     FileContents soup;
     for (const Element& e : elements_) {
+      if (e.props.empty()) continue;
       for (long i = 0; i < e.count; ++i) {
         Vec3 p = Vec3::Zero();
         for (size_t k = 0; k < e.props.size(); ++k) {
@@ -210,24 +251,32 @@ class PlyReader {
     if (text_.substr(0, 3) != "ply")
       throw InvalidInput(who_ + ": " + path_ + " is not a PLY file (it does not start with 'ply')");
     while (true) {
-      const size_t end = text_.find('\n', pos_);
+      const size_t end = text_.find_first_of("\r\n", pos_);
       if (end == std::string_view::npos) fail("header has no 'end_header'");
       std::string_view line = text_.substr(pos_, end - pos_);
-      pos_ = end + 1;
+      pos_ = end + (text_.substr(end, 2) == "\r\n" ? 2 : 1);
       ++line_;
-      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
       const std::string_view key = next_token(line);
+      // Every header line is parsed whole: a word too many is an error, not ignored.
+      const auto end_of_line = [&]() {
+        if (const std::string_view extra = next_token(line); !extra.empty())
+          fail("unexpected '" + printable(extra.substr(0, 40)) + "' at the end of the '" + std::string(key) + "' line");
+      };
       if (key == "format") {
         const std::string_view f = next_token(line);
         if (f == "ascii") binary_ = false;
         else if (f == "binary_little_endian") binary_ = true;
-        else fail("unsupported PLY format '" + std::string(f) + "'");
+        else fail("unsupported PLY format '" + printable(f.substr(0, 40)) + "'");
+        if (next_token(line) != "1.0") fail("unsupported PLY version (1.0 expected)");
+        end_of_line();
       } else if (key == "element") {
         Element e;
         e.name = std::string(next_token(line));
         std::string_view count = next_token(line);
         auto [ptr, ec] = std::from_chars(count.data(), count.data() + count.size(), e.count);
-        if (ec != std::errc() || e.count < 0) fail("bad element count '" + std::string(count) + "'");
+        if (ec != std::errc() || ptr != count.data() + count.size() || e.count < 0 || e.name.empty())
+          fail("bad element count '" + printable(count.substr(0, 40)) + "'");
+        end_of_line();
         elements_.push_back(e);
       } else if (key == "property") {
         if (elements_.empty()) fail("property before any element");
@@ -241,6 +290,8 @@ class PlyReader {
         prop.type = std::string(type);
         check_type(prop.type);
         prop.name = std::string(next_token(line));
+        if (prop.name.empty()) fail("property without a name");
+        end_of_line();
         if (elements_.back().name == "vertex" && prop.list_count_type.empty() && prop.name.size() == 1 &&
             prop.name[0] >= 'x' && prop.name[0] <= 'z')
           prop.coordinate = prop.name[0] - 'x';
@@ -256,10 +307,39 @@ class PlyReader {
             if (!has[k]) fail(std::string("the vertex element has no property '") + char('x' + k) +
                               "' (properties x, y and z, lower case, give the positions)");
         }
+        check_sizes();
         break;
+      } else if (key != "comment" && key != "obj_info" && !key.empty() && !(key == "ply" && line_ == 1)) {
+        fail("unknown PLY header keyword '" + printable(key.substr(0, 40)) + "'");
       }
-      // comment, obj_info: nothing to do
     }
+  }
+
+  // Every element count is checked against the bytes after the header (an item takes at least one byte
+  // per value, two in ASCII), so a corrupt count fails here instead of allocating or looping for it.
+  // Elements without properties take no bytes and are skipped.
+  void check_sizes() {
+    const double left = static_cast<double>(text_.size() - pos_) + 1;
+    double need = 0;
+    for (const Element& e : elements_) {
+      if (e.props.empty()) continue;
+      double item = 0;
+      for (const Property& prop : e.props) {
+        const double scalar = binary_ ? static_cast<double>(type_size(prop.list_count_type.empty() ? prop.type : prop.list_count_type)) : 2;
+        item += scalar;
+      }
+      need += item * static_cast<double>(e.count);
+      if (need > left || e.count > INT32_MAX)
+        fail("element '" + printable(e.name) + "' declares " + std::to_string(e.count) + " items, but only " +
+             std::to_string(text_.size() - pos_) + " bytes follow the header");
+    }
+  }
+
+  static int type_size(const std::string& t) {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+    if (t == "double" || t == "float64") return 8;
+    return 4;
   }
 
   void check_type(const std::string& t) const {
@@ -389,6 +469,8 @@ FileContents read_stl(std::string_view text, const std::string& path, const std:
     throw InvalidInput(who + ": " + path + " is not an STL file (binary size does not match its " +
                        std::to_string(count) + " triangles, and it does not start with 'solid')");
   }
+  if (soup.offsets.size() == 1)
+    throw InvalidInput(who + ": " + path + " has no triangles (an STL file is a list of triangles)");
   soup.points = std::move(vertices.points);
   return soup;
 }
@@ -396,9 +478,8 @@ FileContents read_stl(std::string_view text, const std::string& path, const std:
 FileContents read_contents(const std::string& path, const std::string& who) {
   const std::string ext = file_extension(path);
   check_mesh_format(path, who);
-  if (std::filesystem::is_directory(path))
-    throw InvalidInput(who + ": " + path + " is a folder, not a mesh file");
-  const std::string text = read_file(path, who.c_str());
+  const FileText file(path, who.c_str());
+  const std::string_view text = file.text();
   if (ext == ".off") return read_off(text, path, who);
   if (ext == ".obj") return read_obj(text, path, who);
   if (ext == ".ply") return PlyReader(text, path, who).read();

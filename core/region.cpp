@@ -18,9 +18,14 @@ Region::Region(int num_vertices, int code) : codes_(num_vertices, code) {
 
 Region Region::from_codes(std::vector<int> codes) {
   Region r;
+  // Handle codes are consecutive and every handle has a vertex, so #V vertices have at most #V handles:
+  // a larger code is refused before anything is sized by it.
+  const long max_code = kFirstHandle + static_cast<long>(codes.size()) - 1;
   for (size_t v = 0; v < codes.size(); ++v)
-    if (codes[v] < 0)
-      throw InvalidInput("Region: vertex " + std::to_string(v) + " has negative selection code " + std::to_string(codes[v]));
+    if (codes[v] < 0 || codes[v] > max_code)
+      throw InvalidInput("Region: vertex " + std::to_string(v) + " has selection code " + std::to_string(codes[v]) +
+                         " (0 fixed, 1 free, 2+k handle k, at most " + std::to_string(max_code) + " for " +
+                         std::to_string(codes.size()) + " vertices)");
   r.codes_ = std::move(codes);
   for (int c : r.codes_) r.num_handles_ = std::max(r.num_handles_, c - kFirstHandle + 1);
   return r;
@@ -105,7 +110,8 @@ namespace {
 // Whitespace-separated numbers of a text file with '#' comments, each with its line number.
 template <class T>
 std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char* who, const char* what) {
-  const std::string text = read_file(path, who);
+  const FileText file(path, who);
+  const std::string_view text = file.text();
   std::vector<std::pair<T, int>> out;
   int line = 1;
   size_t i = 0;
@@ -125,7 +131,7 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
       auto [ptr, ec] = std::from_chars(first, text.data() + e, value);
       if (ec != std::errc() || ptr != text.data() + e)
         throw InvalidInput(std::string(who) + ": " + path + " line " + std::to_string(line) + ": expected " + what +
-                           ", found '" + text.substr(i, std::min<size_t>(e - i, 40)) + "'");
+                           ", found '" + printable(text.substr(i, std::min<size_t>(e - i, 40))) + "'");
       out.emplace_back(value, line);
       i = e;
     }
@@ -136,17 +142,18 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
 }  // namespace
 
 Region read_sel(const std::string& path, int num_vertices) {
-  const auto values = read_numbers<int>(path, "read_sel", "an integer selection code (0 fixed, 1 free, 2+ handle)");
+  const auto values = read_numbers<long>(path, "read_sel", "an integer selection code (0 fixed, 1 free, 2+ handle)");
   if (static_cast<int>(values.size()) != num_vertices)
     throw InvalidInput("read_sel: " + path + " has " + std::to_string(values.size()) + " labels but the mesh has " +
                        std::to_string(num_vertices) + " vertices");
   std::vector<int> codes(values.size());
   for (size_t v = 0; v < values.size(); ++v) {
-    if (values[v].first < 0)
-      throw InvalidInput("read_sel: " + path + " line " + std::to_string(values[v].second) + ": unknown label " +
+    if (values[v].first < 0 || values[v].first > Region::kFirstHandle + static_cast<long>(values.size()) - 1)
+      throw InvalidInput("read_sel: " + path + " line " + std::to_string(values[v].second) + ": label " +
                          std::to_string(values[v].first) + " for vertex " + std::to_string(v) +
-                         " (0 fixed, 1 free, 2+k handle k)");
-    codes[v] = values[v].first;
+                         " is out of range (0 fixed, 1 free, 2+k handle k; " + std::to_string(values.size()) +
+                         " vertices have at most " + std::to_string(values.size()) + " handles)");
+    codes[v] = static_cast<int>(values[v].first);
   }
   return Region::from_codes(std::move(codes));
 }
@@ -171,9 +178,10 @@ Region read_dmat_groups(const std::string& path, int num_vertices) {
   std::vector<int> codes(rows);
   for (long v = 0; v < rows; ++v) {
     const long g = values[v + 2].first;
-    if (g < -1)
+    if (g < -1 || g >= rows)
       throw InvalidInput("read_dmat_groups: " + path + " line " + std::to_string(values[v + 2].second) +
-                         ": group " + std::to_string(g) + " (expected -1 for free or a handle index >= 0)");
+                         ": group " + std::to_string(g) + " is out of range (-1 for free, or a handle index 0.." +
+                         std::to_string(rows - 1) + ")");
     codes[v] = g < 0 ? Region::kFree : Region::kFirstHandle + static_cast<int>(g);
   }
   return Region::from_codes(std::move(codes));

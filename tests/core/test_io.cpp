@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <random>
 
@@ -313,11 +315,91 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
                     Contains("line 6") && Contains("index 7 out of range"));
   CHECK_THROWS_WITH(load_mesh(write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")),
                     Contains("line 4") && Contains("out of range"));
-  CHECK_THROWS_WITH(load_mesh(write("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n")), Contains("file ends after 2 of 3 vertices"));
+  CHECK_THROWS_WITH(load_mesh(write("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n")), Contains("declares 3 vertices and 1 faces, but only 12 bytes follow"));
+  CHECK_THROWS_WITH(load_mesh(write("short2.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n\n\n\n\n\n\n\n\n\n\n\n\n\n")),
+                    Contains("file ends after 2 of 3 vertices"));
   CHECK_THROWS_WITH(load_mesh(write("word.off", "OFF\n3 1 0\n0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n")),
                     Contains("line 4") && Contains("'zero'"));
   CHECK_THROWS_WITH(load_mesh(write("mesh.xyz", "1 2 3\n")), Contains("unknown format"));
   CHECK_THROWS_WITH(load_mesh(tmp.path.string() + "/"), Contains("unknown format"));
+}
+
+// Issue 14, kind 2: counts are checked against the bytes that follow, headers are parsed strictly, and a
+// reader stops at the first bad line without reading the rest of the file.
+TEST_CASE("readers refuse counts the file cannot hold and stop at the first bad line", "[core][io][bad-input]") {
+  test::TempDir tmp;
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(tmp.file(name), std::ios::binary) << text;
+    return tmp.file(name);
+  };
+  const std::string ply = "ply\nformat ascii 1.0\n";
+  // A vertex count of 4e9 (no data): refused, not 1.5 GB/s of growth.
+  CHECK_THROWS_WITH(load_soup(write("huge.ply", ply + "element vertex 4000000000\nproperty float x\nproperty float y\n"
+                                                    "property float z\nend_header\n")),
+                    Contains("element 'vertex' declares 4000000000 items, but only 0 bytes follow"));
+  // An element without properties and a huge count: skipped, not looped over forever.
+  const Mesh junk = load_mesh(write("junk.ply", ply + "element junk 9000000000000000000\nelement vertex 3\n"
+                                                      "property float x\nproperty float y\nproperty float z\n"
+                                                      "element face 1\nproperty list uchar int vertex_indices\n"
+                                                      "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+  CHECK(junk.n_vertices() == 3);
+  CHECK(junk.n_faces() == 1);
+  // A count with trailing junk, a word too many, an unknown keyword: strict header.
+  CHECK_THROWS_WITH(load_soup(write("tj.ply", ply + "element vertex 3abc\nproperty float x\nend_header\n")),
+                    Contains("line 3") && Contains("bad element count '3abc'"));
+  CHECK_THROWS_WITH(load_soup(write("extra.ply", ply + "element vertex 3 4\nend_header\n")),
+                    Contains("line 3") && Contains("unexpected '4'"));
+  CHECK_THROWS_WITH(load_soup(write("key.ply", ply + "elemnt vertex 3\nend_header\n")),
+                    Contains("line 3") && Contains("unknown PLY header keyword 'elemnt'"));
+  // OFF counts the rest of the file cannot hold.
+  CHECK_THROWS_WITH(load_soup(write("huge.off", "OFF\n2000000000 0 0\n0 0 0\n")),
+                    Contains("declares 2000000000 vertices and 0 faces, but only 6 bytes follow"));
+  CHECK_THROWS_WITH(load_soup(write("faces.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n1000000000 0 1 2\n")),
+                    Contains("line 6") && Contains("1000000000 corners, more than the file holds"));
+  // Binary data as OBJ: stops at the first statement that is not a word (before: skipped it all).
+  std::string binary = "v 0 0 0\n";
+  for (long i = 0; i < 1 << 20; ++i) binary.push_back(static_cast<char>((i * 7919 + 13) % 256));
+  // (byte 0 is a CR: line 2 is empty)
+  CHECK_THROWS_WITH(load_soup(write("binary.obj", binary)), Contains("line 3") && Contains("not an OBJ statement"));
+  // An STL with no triangles is not a point cloud.
+  CHECK_THROWS_WITH(load_soup(write("empty.stl", "solid x\nendsolid x\n")), Contains("has no triangles"));
+  CHECK_THROWS_WITH(load_soup(write("empty-binary.stl", std::string(84, '\0'))), Contains("has no triangles"));
+  // A folder is named as one.
+  std::filesystem::create_directory(tmp.file("folder.off"));
+  CHECK_THROWS_WITH(load_soup(tmp.file("folder.off")), Contains("is a folder"));
+}
+
+// Issue 14, kind 7: files that other tools write and read read right, and messages point at the fault.
+TEST_CASE("glued OFF headers, wrapped records, CR line ends and byte-order marks read right", "[core][io]") {
+  test::TempDir tmp;
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(tmp.file(name), std::ios::binary) << text;
+    return tmp.file(name);
+  };
+  const auto check_square = [](const TriangleSoup& s) {
+    REQUIRE(s.P.rows() == 4);
+    CHECK(s.P.row(2) == Eigen::RowVector3d(1, 1, 0));
+    REQUIRE(s.F.rows() == 2);
+    CHECK(s.F.row(1) == Eigen::RowVector3i(0, 2, 3));
+  };
+  const std::string vertices = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n", faces = "3 0 1 2\n3 0 2 3\n";
+  check_square(load_soup(write("glued.off", "OFF4 2 0\n" + vertices + faces)));  // ModelNet's header
+  check_square(load_soup(write("wrapped.off", "OFF\n4 2 0\n0 0\n0\n1 0 0\n1 1\n0\n0 1 0\n3 0 1\n2\n3\n0 2 3\n")));
+  std::string cr = "OFF\n4 2 0\n" + vertices + faces;
+  std::replace(cr.begin(), cr.end(), '\n', '\r');
+  check_square(load_soup(write("cr.off", cr)));
+  std::string crlf;
+  for (char c : "OFF\n4 2 0\n" + vertices + faces) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  check_square(load_soup(write("crlf.off", crlf)));
+  const std::string bom = "\xEF\xBB\xBF";
+  check_square(load_soup(write("bom.obj", bom + "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n")));  // dropped v 1 before
+  check_square(load_soup(write("bom.off", bom + "OFF\n4 2 0\n" + vertices + faces)));
+  // Vertices packed several per line are read one per line: the message says so.
+  CHECK_THROWS_WITH(load_soup(write("packed.off", "OFF\n4 0 0\n0 0 0 1 0 0\n1 1 0 0 1 0\n\n\n\n\n\n\n\n\n\n\n\n\n")),
+                    Contains("file ends after 2 of 4 vertices") && Contains("line 3 has more than three numbers"));
+  CHECK_THROWS_WITH(load_soup(write("word.off", "OFFICE\n")), Contains("not OFF followed by counts"));
+  // Bytes that are not text are shown as \xHH.
+  CHECK_THROWS_WITH(load_soup(write("bad.obj", "v 0 0 0\n\x01\x02 1 2\n")), Contains("'\\x01\\x02'"));
 }
 
 TEST_CASE("saving is atomic: a failed save leaves the old file untouched", "[core][io]") {

@@ -32,6 +32,7 @@ EditCase load_edit_case(const std::string& mesh, const std::string& sel, const s
   c.P = std::move(soup.P);
   c.F = std::move(soup.F);
   c.surface_problem = check_surface(c.P, c.F).problem();  // orients the faces where it can
+  c.seam_vertices = count_seam_vertices(c.P, c.F);
   const int nv = static_cast<int>(c.P.rows());
   if (!sel.empty()) c.region = file_extension(sel) == ".dmat" ? read_dmat_groups(sel, nv) : read_sel(sel, nv);
   if (!def.empty()) {
@@ -47,6 +48,32 @@ EditCase file_case(const std::string& mesh, const std::string& sel, const std::s
   if (sel.empty()) throw InvalidInput("file_case: " + mesh + " needs a region file (.sel or .dmat)");
   if (def.empty()) throw InvalidInput("file_case: " + mesh + " needs a transforms file (.def)");
   return load_edit_case(mesh, sel, def);
+}
+
+EditCase weld_case(EditCase c, double eps) {
+  auto weld = std::make_shared<Weld>(weld_vertices(c.P, c.F, eps));
+  if (c.region.num_vertices() > 0) {
+    std::vector<int> codes(static_cast<size_t>(weld->P.rows()), -1), first(codes.size(), -1);
+    for (int v = 0; v < c.region.num_vertices(); ++v) {
+      const int w = weld->welded_of[v];
+      if (codes[w] < 0) {
+        codes[w] = c.region.code(v);
+        first[w] = v;
+      } else if (codes[w] != c.region.code(v)) {
+        throw InvalidInput("weld: vertices " + std::to_string(first[w]) + " and " + std::to_string(v) +
+                           " are welded (within " + std::to_string(eps) + ") but have region labels " +
+                           std::to_string(codes[w]) + " and " + std::to_string(c.region.code(v)));
+      }
+    }
+    c.region = Region::from_codes(std::move(codes));
+  }
+  c.file_F = std::move(c.F);
+  c.P = weld->P;
+  c.F = weld->F;
+  c.surface_problem = check_surface(c.P, c.F).problem();
+  c.seam_vertices = count_seam_vertices(c.P, c.F);
+  c.weld = std::move(weld);
+  return c;
 }
 
 void require_surface(const EditCase& edit, const std::string& method) {

@@ -10,6 +10,7 @@
 #include "msdeform/core/region.h"
 #include "msdeform/core/subdivision.h"
 #include "msdeform/core/types.h"
+#include "msdeform/core/weld.h"
 
 namespace msd {
 
@@ -27,6 +28,13 @@ struct EditCase {
   //! SurfaceCheck::problem, e.g. "no faces (a point cloud)"); empty when it is one. Surface methods need
   //! one (require_surface); space methods deform any input.
   std::string surface_problem;
+  //! Boundary vertices at the coordinates of another boundary vertex (count_seam_vertices): a mesh split
+  //! along seams, which deforms as separate pieces there unless welded (weld_case). 0 for built-in scenes.
+  int seam_vertices = 0;
+  //! Set by weld_case: the weld (Weld::unweld puts results back on the file's vertices) and the file's
+  //! own faces, to write results with.
+  std::shared_ptr<const Weld> weld;
+  Faces file_F;
 };
 
 //! A built-in scene (core/scenes.h) at about `resolution` vertices as an edit case.
@@ -44,6 +52,13 @@ EditCase file_case(const std::string& mesh, const std::string& sel, const std::s
 //! empty `def` the transforms (for commands that need neither, e.g. a low-pass decomposition).
 //! \throw InvalidInput naming the file, or the handle-count mismatch when both sel and def are given.
 EditCase load_edit_case(const std::string& mesh, const std::string& sel = "", const std::string& def = "");
+
+//! The edit with its vertices within eps (mesh units) welded (weld_vertices): a method then sees one
+//! surface across seams; results go back on the file's vertices with edit.weld->unweld and are written
+//! with edit.file_F, so the file's vertex count and order are kept. surface_problem and seam_vertices are
+//! those of the welded mesh. \throw InvalidInput if welded vertices have different region labels (naming
+//! both), or for a negative or non-finite eps.
+EditCase weld_case(EditCase edit, double eps);
 
 //! Refuses an edit that a surface method (or operation) cannot take: method is its name for the message.
 //! \throw InvalidInput "<method> is a surface method and <file> is not a manifold triangle mesh:

@@ -7,6 +7,7 @@
 
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/surface_check.h"
+#include "msdeform/core/weld.h"
 
 namespace msd {
 
@@ -18,6 +19,7 @@ MeshInfo mesh_info(const Positions& P, const Faces& F) {
   info.faces = check.faces;
   info.components = check.components;
   info.unreferenced_vertices = check.unreferenced_vertices;
+  info.seam_vertices = count_seam_vertices(P, oriented);
   info.nonmanifold_edges = static_cast<int>(check.nonmanifold_edges.size());
   info.nonmanifold_vertices = static_cast<int>(check.nonmanifold_vertices.size());
   info.nonorientable_components = static_cast<int>(check.nonorientable_faces.size());

@@ -14,6 +14,7 @@ struct MeshInfo {
   int boundary_edges = 0;            //!< edges in exactly one face
   int boundary_loops = 0;            //!< connected curves of boundary edges
   int unreferenced_vertices = 0;     //!< vertices no face uses (all of a point cloud's)
+  int seam_vertices = 0;             //!< boundary vertices at another's coordinates (count_seam_vertices)
   int degenerate_faces = 0;          //!< zero-area faces (see cotan_laplacian)
   int nonmanifold_edges = 0;         //!< edges in more than two faces
   int nonmanifold_vertices = 0;      //!< vertices whose faces do not form one fan

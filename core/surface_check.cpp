@@ -4,28 +4,11 @@
 #include <array>
 #include <numeric>
 
+#include "msdeform/core/disjoint_sets.h"
 #include "msdeform/core/errors.h"
 
 namespace msd {
 namespace {
-
-// Union-find with path halving; a root is its set's smallest member (unions link the larger root below
-// the smaller), so "the first" of a set is its root.
-class DisjointSets {
- public:
-  explicit DisjointSets(int n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
-  int find(int x) {
-    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
-    return x;
-  }
-  void unite(int a, int b) {
-    a = find(a), b = find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
-  }
-
- private:
-  std::vector<int> parent_;
-};
 
 std::string join_ids(const std::vector<int>& ids, size_t shown) {
   std::string s;

@@ -18,6 +18,8 @@ void print_info(const std::string& what, const MeshInfo& i, const LoadReport* re
   std::printf("  boundary edges        %d in %d loop(s)\n", i.boundary_edges, i.boundary_loops);
   std::printf("  euler characteristic  %d\n", i.euler_characteristic);
   std::printf("  unreferenced vertices %d\n", i.unreferenced_vertices);
+  std::printf("  seam vertices         %d%s\n", i.seam_vertices,
+              i.seam_vertices > 0 ? " (boundary vertices at another's coordinates: deform --weld 0 joins them)" : "");
   std::printf("  degenerate faces      %d (zero area)\n", i.degenerate_faces);
   std::printf("  non-manifold edges    %d\n", i.nonmanifold_edges);
   std::printf("  non-manifold vertices %d\n", i.nonmanifold_vertices);

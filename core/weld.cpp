@@ -1,0 +1,132 @@
+#include "msdeform/core/weld.h"
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <numeric>
+#include <string>
+#include <unordered_map>
+
+#include "msdeform/core/checks.h"
+#include "msdeform/core/disjoint_sets.h"
+#include "msdeform/core/errors.h"
+
+namespace msd {
+namespace {
+
+void check(const Positions& P, const Faces& F, double eps, const char* who) {
+  if (!(eps >= 0) || !std::isfinite(eps))
+    throw InvalidInput(std::string(who) + ": the distance must be finite and >= 0, got " + std::to_string(eps));
+  check_faces(F, P.rows(), who, "the mesh");
+}
+
+// Joins the listed vertices that lie within eps of each other: a hash grid of cells of size eps (exact
+// coordinates when eps is 0), each point compared with the points of its 27 neighbouring cells.
+void join_close(const Positions& P, const std::vector<int>& ids, double eps, DisjointSets& groups) {
+  using Cell = std::array<std::int64_t, 3>;
+  struct Hash {
+    size_t operator()(const Cell& c) const {
+      return static_cast<size_t>(c[0] * 73856093) ^ static_cast<size_t>(c[1] * 19349663) ^ static_cast<size_t>(c[2] * 83492791);
+    }
+  };
+  std::unordered_map<Cell, std::vector<int>, Hash> grid;
+  const auto cell_of = [&](int v) {
+    Cell c;
+    for (int k = 0; k < 3; ++k) {
+      if (eps > 0) {
+        const double q = std::floor(P(v, k) / eps);
+        c[k] = std::abs(q) < 4e18 ? static_cast<std::int64_t>(q) : 0;  // far out: one cell, compared exactly
+      } else {
+        const double x = P(v, k) + 0.0;  // -0 and +0 are one coordinate
+        std::memcpy(&c[k], &x, sizeof x);
+      }
+    }
+    return c;
+  };
+  for (int v : ids) grid[cell_of(v)].push_back(v);
+  const double eps2 = eps * eps;
+  for (int v : ids) {
+    const Cell c = cell_of(v);
+    const int reach = eps > 0 ? 1 : 0;
+    for (int dx = -reach; dx <= reach; ++dx)
+      for (int dy = -reach; dy <= reach; ++dy)
+        for (int dz = -reach; dz <= reach; ++dz) {
+          const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (it == grid.end()) continue;
+          for (int w : it->second)
+            if (w < v && (P.row(v) - P.row(w)).squaredNorm() <= eps2) groups.unite(v, w);
+        }
+  }
+}
+
+std::vector<int> boundary_vertices(const Positions& P, const Faces& F) {
+  std::unordered_map<std::uint64_t, int> edge_faces;
+  edge_faces.reserve(static_cast<size_t>(3 * F.rows()));
+  const auto key = [](int a, int b) {
+    return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+  };
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++edge_faces[key(F(f, k), F(f, (k + 1) % 3))];
+  std::vector<char> on(static_cast<size_t>(P.rows()), 0);
+  for (const auto& [e, n] : edge_faces)
+    if (n == 1) on[e >> 32] = on[e & 0xffffffffu] = 1;
+  std::vector<int> out;
+  for (int v = 0; v < static_cast<int>(on.size()); ++v)
+    if (on[v]) out.push_back(v);
+  return out;
+}
+
+}  // namespace
+
+int count_seam_vertices(const Positions& P, const Faces& F, double eps) {
+  check(P, F, eps, "count_seam_vertices");
+  const std::vector<int> boundary = boundary_vertices(P, F);
+  DisjointSets groups(static_cast<int>(P.rows()));
+  join_close(P, boundary, eps, groups);
+  std::vector<int> size(static_cast<size_t>(P.rows()), 0);
+  for (int v : boundary) ++size[groups.find(v)];
+  int count = 0;
+  for (int v : boundary) count += size[groups.find(v)] > 1;
+  return count;
+}
+
+Weld weld_vertices(const Positions& P, const Faces& F, double eps) {
+  check(P, F, eps, "weld_vertices");
+  std::vector<int> all(static_cast<size_t>(P.rows()));
+  std::iota(all.begin(), all.end(), 0);
+  DisjointSets groups(static_cast<int>(P.rows()));
+  join_close(P, all, eps, groups);
+  Weld w;
+  w.welded_of.assign(all.size(), -1);
+  int n = 0;
+  for (int v : all)
+    w.welded_of[v] = groups.find(v) == v ? n++ : w.welded_of[groups.find(v)];
+  w.P.resize(n, 3);
+  for (int v : all)
+    if (groups.find(v) == v) w.P.row(w.welded_of[v]) = P.row(v);
+  w.merged = static_cast<int>(P.rows()) - n;
+  w.F.resize(F.rows(), 3);
+  Eigen::Index rows = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const int a = w.welded_of[F(f, 0)], b = w.welded_of[F(f, 1)], c = w.welded_of[F(f, 2)];
+    if (a == b || b == c || a == c) {
+      ++w.faces_dropped;
+      continue;
+    }
+    w.F.row(rows++) << a, b, c;
+  }
+  w.F.conservativeResize(rows, 3);
+  return w;
+}
+
+Positions Weld::unweld(const Positions& welded) const {
+  if (welded.rows() != P.rows())
+    throw InvalidInput("Weld::unweld: " + std::to_string(welded.rows()) + " rows given, the welded mesh has " +
+                       std::to_string(P.rows()) + " vertices");
+  Positions out(static_cast<Eigen::Index>(welded_of.size()), 3);
+  for (size_t v = 0; v < welded_of.size(); ++v) out.row(static_cast<Eigen::Index>(v)) = welded.row(welded_of[v]);
+  return out;
+}
+
+}  // namespace msd

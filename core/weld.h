@@ -1,0 +1,35 @@
+#pragma once
+//! \file Seams: meshes split along coincident boundary vertices (converted game and glTF assets) deform
+//! as separate pieces. Counting them, and welding vertices within a distance so that a method sees one
+//! surface while the file keeps its vertices.
+
+#include <vector>
+
+#include "msdeform/core/types.h"
+
+namespace msd {
+
+//! Boundary vertices (on an edge of exactly one face) that lie within eps (mesh units; 0: at the same
+//! coordinates) of another boundary vertex: the vertices of open seams. O(#V + #F) expected.
+//! \throw InvalidInput for a negative or non-finite eps, or a face index outside [0, #V).
+int count_seam_vertices(const Positions& P, const Faces& F, double eps = 0);
+
+//! A mesh with vertices within a distance merged (Blender's "merge by distance"), and the way back.
+struct Weld {
+  //! #V: each original vertex's vertex in the welded mesh. Vertices chained within eps are one group; a
+  //! group's welded vertex sits at its lowest-numbered member, and groups are numbered in that order.
+  std::vector<int> welded_of;
+  Positions P;     //!< #W by 3 welded positions
+  Faces F;         //!< the faces re-indexed, without those that lost a corner to the merge
+  int merged = 0;  //!< #V − #W
+  int faces_dropped = 0;
+  //! Positions of the welded mesh (#W by 3) back on the original vertices (#V by 3): every member of a
+  //! group gets its group's position. \throw InvalidInput for a row count other than #W.
+  Positions unweld(const Positions& welded) const;
+};
+
+//! Merges vertices within eps of each other (eps in mesh units; 0: identical coordinates only).
+//! \throw InvalidInput for a negative or non-finite eps, or a face index outside [0, #V).
+Weld weld_vertices(const Positions& P, const Faces& F, double eps);
+
+}  // namespace msd

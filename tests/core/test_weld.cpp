@@ -1,0 +1,105 @@
+// Seams (issue 14, kind 5): a mesh split along coincident boundary vertices is detected, and welding
+// joins it for a method while the file's vertices stay the file's.
+
+#include <catch2/catch.hpp>
+
+#include "msdeform/core/edit_case.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/core/surface_check.h"
+#include "msdeform/core/weld.h"
+#include "test_util.h"
+
+using namespace msd;
+using Catch::Matchers::Contains;
+
+namespace {
+// The bumpy plane cut along x = 0.5: the faces right of the cut get their own copies of the cut's
+// vertices (appended), as a converter that splits by material would leave it.
+EditCase split_plane() {
+  EditCase c = scene_case("lift", 2000);
+  const Eigen::Index n = c.P.rows();
+  std::vector<int> copy(static_cast<size_t>(n), -1);
+  std::vector<Vec3> extra;
+  for (Eigen::Index f = 0; f < c.F.rows(); ++f) {
+    double cx = 0;
+    for (int k = 0; k < 3; ++k) cx += c.P(c.F(f, k), 0) / 3;
+    if (cx < 0.5) continue;
+    for (int k = 0; k < 3; ++k) {
+      const int v = c.F(f, k);
+      if (std::abs(c.P(v, 0) - 0.5) > 1e-3) continue;  // not on the cut
+      if (copy[v] < 0) {
+        copy[v] = static_cast<int>(n + static_cast<Eigen::Index>(extra.size()));
+        extra.push_back(c.P.row(v).transpose());
+      }
+      c.F(f, k) = copy[v];
+    }
+  }
+  c.P.conservativeResize(n + static_cast<Eigen::Index>(extra.size()), 3);
+  std::vector<int> codes = c.region.codes();
+  for (size_t i = 0; i < extra.size(); ++i) c.P.row(n + static_cast<Eigen::Index>(i)) = extra[i].transpose();
+  for (Eigen::Index v = 0; v < n; ++v)
+    if (copy[v] >= 0) codes.push_back(codes[v]);
+  c.region = Region::from_codes(codes);
+  return c;
+}
+}  // namespace
+
+TEST_CASE("weld: a plane split along a seam is counted, welded for the method and unwelded for the file",
+          "[core][weld]") {
+  const EditCase plane = scene_case("lift", 2000);
+  CHECK(count_seam_vertices(plane.P, plane.F) == 0);
+  const EditCase split = split_plane();
+  const int copies = static_cast<int>(split.P.rows() - plane.P.rows());
+  REQUIRE(copies > 10);
+  CHECK(count_seam_vertices(split.P, split.F) == 2 * copies);  // each cut vertex and its copy
+  Faces oriented = split.F;
+  CHECK(check_surface(split.P, oriented).components == 2);  // it deforms as two pieces
+
+  const EditCase welded = weld_case(split, 0);
+  CHECK(welded.weld->merged == copies);
+  CHECK(welded.P.rows() == plane.P.rows());
+  CHECK(welded.seam_vertices == 0);
+  CHECK(welded.surface_problem.empty());
+  CHECK(welded.file_F == split.F);
+  oriented = welded.F;
+  CHECK(check_surface(welded.P, oriented).components == 1);
+  CHECK(welded.region.num_handles() == split.region.num_handles());
+  // Back on the file's vertices: same count and order; every copy at its original's position.
+  Positions moved = welded.P;
+  moved.col(2).array() += 1;
+  const Positions back = welded.weld->unweld(moved);
+  REQUIRE(back.rows() == split.P.rows());
+  CHECK((back - split.P).col(2).array().abs().maxCoeff() == Approx(1));
+  CHECK((back.leftCols(2) - split.P.leftCols(2)).cwiseAbs().maxCoeff() == 0);
+  CHECK_THROWS_AS(welded.weld->unweld(split.P), InvalidInput);
+}
+
+TEST_CASE("weld: a distance joins near vertices, conflicting labels and bad distances are refused", "[core][weld]") {
+  Positions P(4, 3);
+  P << 0, 0, 0, 1, 0, 0, 0, 1, 0, 1e-7, 0, 0;
+  Faces F(2, 3);
+  F << 0, 1, 2, 3, 2, 1;  // vertex 3 is a near copy of vertex 0
+  CHECK(count_seam_vertices(P, F) == 0);
+  CHECK(count_seam_vertices(P, F, 1e-6) == 2);
+  const Weld exact = weld_vertices(P, F, 0);
+  CHECK(exact.merged == 0);
+  const Weld near = weld_vertices(P, F, 1e-6);
+  CHECK(near.merged == 1);
+  CHECK(near.welded_of == std::vector<int>{0, 1, 2, 0});
+  CHECK(near.faces_dropped == 0);
+  const Weld all = weld_vertices(P, F, 10);  // everything in one point: every face loses corners
+  CHECK(all.P.rows() == 1);
+  CHECK(all.F.rows() == 0);
+  CHECK(all.faces_dropped == 2);
+  CHECK_THROWS_WITH(weld_vertices(P, F, -1), Contains("finite and >= 0"));
+  F(1, 0) = 9;
+  CHECK_THROWS_WITH(weld_vertices(P, F, 0), Contains("face 1 of the mesh has vertex index 9"));
+
+  EditCase c;
+  c.P = P;
+  c.F.resize(2, 3);
+  c.F << 0, 1, 2, 3, 2, 1;
+  c.region = Region::from_codes({0, 1, 2, 2});
+  CHECK_THROWS_WITH(weld_case(c, 1e-6), Contains("vertices 0 and 3 are welded") && Contains("labels 0 and 2"));
+}

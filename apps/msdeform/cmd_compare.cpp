@@ -266,6 +266,7 @@ void add_compare_command(CLI::App& app) {
     std::error_code ec;
     for (const char* sub : {"images", "meshes"}) fs::create_directories(out / sub, ec);
     if (ec) throw InvalidInput("compare: cannot create " + (out / "images").string() + ": " + ec.message());
+    check_writable((out / "index.html").string(), "-o");  // before any work
 
     std::vector<MethodResult> all;
     std::vector<SceneOutput> scene_outputs;
@@ -346,6 +347,9 @@ void add_compare_command(CLI::App& app) {
     for (const auto& r : all) failed += !r.ok;
     std::printf("%s", metrics_markdown(all).c_str());
     std::printf("\nwrote %s/index.html (%zu results, %d failed) in %.1f s\n", a->output.c_str(), all.size(), failed, seconds);
+    if (failed > 0)  // the pages are written, but the exit status says not everything ran
+      throw Error("compare: " + std::to_string(failed) + " of " + std::to_string(all.size()) +
+                  " runs failed (their rows in metrics.md and their pictures say why)");
   });
 }
 

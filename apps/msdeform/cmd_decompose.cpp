@@ -38,6 +38,7 @@ void add_decompose_command(CLI::App& app) {
   cmd->callback([=] {
     if (file_extension(*output) != ".ply")
       throw InvalidInput("decompose: " + *output + ": the output carries per-vertex detail heights and must be .ply");
+    edit->check_output(*output, "-o");
     const bool fairing = decomposition->options.kind == DecompositionKind::Fairing;
     EditCase c = edit->load(/*need_transforms=*/false, /*need_region=*/fairing);
     require_surface(c, "decompose");

@@ -1,6 +1,5 @@
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 
 #include "apps/msdeform/commands.h"
@@ -16,20 +15,6 @@ namespace msd::cli {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-// Whether two paths name one file (an existing one, or the same spelling once made absolute).
-bool same_file(const std::string& a, const std::string& b) {
-  namespace fs = std::filesystem;
-  std::error_code error;
-  if (fs::exists(a, error) && fs::exists(b, error)) return fs::equivalent(a, b, error);
-  return fs::weakly_canonical(a, error) == fs::weakly_canonical(b, error);
-}
-// Refuses an output with an unknown format or naming one of the inputs (which it would replace).
-void check_output(const std::string& path, const char* option, const std::vector<std::string>& inputs) {
-  check_mesh_format(path, option);
-  for (const std::string& input : inputs)
-    if (!input.empty() && same_file(path, input))
-      throw InvalidInput(std::string(option) + " " + path + " is one of the inputs; it would be replaced. Write elsewhere");
-}
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 // What to change when a multi-scale frame folded triangles over its base.
 std::string fold_advice(const Deformer& deformer) {
@@ -56,19 +41,30 @@ void add_deform_command(CLI::App& app) {
   edit->add_to(*cmd);
   method->add_to(*cmd);
   cmd->add_option("-o,--output", *output, "Deformed mesh to write (.off .obj .ply .stl); written atomically")->required();
+  auto weld = std::make_shared<double>(-1);
+  cmd->add_option("--weld", *weld,
+                  "Weld vertices within EPS (mesh units; 0: identical coordinates) before deforming, so a mesh split "
+                  "along seams deforms as one surface; the output keeps the file's vertices and faces")
+      ->check(CLI::NonNegativeNumber);
   auto controls_output = std::make_shared<std::string>();
   cmd->add_option("--controls-output", *controls_output,
                   "lattice, cage-mvc, cage-harmonic: also write the deformed control points (the lattice's as a point "
                   "cloud, the cage with its faces; .off .obj .ply)");
   cmd->callback([=] {
     // Outputs are checked before any work: a known format, and never one of the inputs or each other.
-    const std::vector<std::string> inputs = {edit->mesh, edit->sel, edit->def, method->cage_file};
-    check_output(*output, "-o", inputs);
+    edit->check_output(*output, "-o", {method->cage_file});
     if (!controls_output->empty()) {
-      check_output(*controls_output, "--controls-output", inputs);
+      edit->check_output(*controls_output, "--controls-output", {method->cage_file});
       if (same_file(*controls_output, *output)) throw InvalidInput("--controls-output and -o name the same file");
     }
-    const EditCase c = edit->load();
+    const EditCase c = *weld >= 0 ? weld_case(edit->load(), *weld) : edit->load();
+    if (c.weld)
+      std::printf("welded %d vertices into others (within %g); %d faces lost a corner and were dropped\n",
+                  c.weld->merged, *weld, c.weld->faces_dropped);
+    if (c.seam_vertices > 0)
+      std::fprintf(stderr, "warning: %d boundary vertices lie at the coordinates of another boundary vertex (a mesh "
+                           "split along seams): it deforms as separate pieces there; --weld 0 joins them\n",
+                   c.seam_vertices);
     std::unique_ptr<Deformer> deformer = method->make(c);
     if (deformer->traits().domain == DeformerDomain::Surface) require_surface(c, method->method_name());
     const auto* space = dynamic_cast<const SpaceDeformer*>(deformer.get());
@@ -88,7 +84,10 @@ void add_deform_command(CLI::App& app) {
     t0 = Clock::now();
     deformer->deform(c.transforms, out);
     const double frame_ms = ms_since(t0);
-    save_mesh(out, c.F, *output);
+    if (c.weld)
+      save_mesh(c.weld->unweld(out), c.file_F, *output);  // the file's vertices and faces
+    else
+      save_mesh(out, c.F, *output);
     if (!controls_output->empty()) {
       save_mesh(space->control_points() + space->coefficients(), space->control_faces(), *controls_output);
       std::printf("  wrote the deformed control points (%d) to %s\n", space->num_coefficients(), controls_output->c_str());

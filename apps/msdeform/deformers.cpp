@@ -135,7 +135,7 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
                                             "iterations per frame at most (default: arap " +
                                                 std::to_string(ArapOptions{}.max_iterations) + ", primo " +
                                                 std::to_string(PrimoOptions{}.max_iterations) + ")")
-                          ->check(CLI::PositiveNumber);
+                          ->check(CLI::Range(1, 1000000));
   tolerance_option = iterative->add_option("--tolerance", tolerance,
                                            "stop when one iteration moves no vertex (arap) or no prism corner (primo) "
                                            "by more than this fraction of the bounding-box diagonal; 0: exactly "
@@ -161,7 +161,7 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   scoped_options.push_back({primo->add_option("--prism-thickness", settings.primo.thickness,
                                               "prism height relative to the mean edge length (> 0); thicker prisms "
                                               "resist bending more")
-                                ->check(CLI::PositiveNumber)
+                                ->check(CLI::Range(1e-6, 1e6))
                                 ->capture_default_str(),
                             {"primo"}});
   auto* space = cmd.add_option_group("space", "lattice, cage-mvc, cage-harmonic, rbf: space deformations (9.5, 9.6)");
@@ -203,7 +203,7 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   scoped_options.push_back({space->add_option("--harmonic-resolution", settings.cage.harmonic_resolution,
                                               "cage-harmonic: grid cells along the cage's longest side (128: about "
                                               "40 s and 4 GB with a 186-vertex cage)")
-                                ->check(CLI::Range(4, 128))
+                                ->check(CLI::Range(4, CageOptions::kMaxHarmonicResolution))
                                 ->capture_default_str(),
                             {"cage-harmonic"}});
   scoped_options.push_back({space->add_option("--max-centres", settings.rbf.max_centres,

@@ -1,6 +1,10 @@
 #include "apps/msdeform/edit_case.h"
 
+#include <filesystem>
+
+#include "msdeform/core/atomic_file.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
 #include "msdeform/core/scenes.h"
 
 namespace msd::cli {
@@ -19,6 +23,27 @@ void EditCaseOptions::add_to(CLI::App& cmd) {
       ->excludes(def_opt);
   cmd.add_option("--resolution", resolution, "Approximate vertex count of a built-in scene (e.g. 10k, 100k, 1M)")
       ->capture_default_str();
+  cmd.add_flag("--force", force, "Let an output replace one of the input files (refused otherwise)");
+}
+
+bool same_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (fs::exists(a, error) && fs::exists(b, error)) return fs::equivalent(a, b, error);
+  return fs::weakly_canonical(a, error) == fs::weakly_canonical(b, error);
+}
+
+void EditCaseOptions::check_output(const std::string& output, const char* option,
+                                   const std::vector<std::string>& other_inputs) const {
+  check_mesh_format(output, option);
+  check_writable(output, option);
+  if (force) return;
+  std::vector<std::string> inputs = {mesh, sel, def};
+  inputs.insert(inputs.end(), other_inputs.begin(), other_inputs.end());
+  for (const std::string& input : inputs)
+    if (!input.empty() && same_file(output, input))
+      throw InvalidInput(std::string(option) + " " + output + " is one of the inputs; it would be replaced. Write "
+                         "elsewhere, or give --force");
 }
 
 EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {

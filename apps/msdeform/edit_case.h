@@ -2,6 +2,7 @@
 // Command-line options that choose an edit: mesh files or a built-in scene (loaded by core/edit_case.h).
 
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -9,9 +10,18 @@
 
 namespace msd::cli {
 
+// Whether two paths name one file (an existing one, or the same spelling once made absolute).
+bool same_file(const std::string& a, const std::string& b);
+
 struct EditCaseOptions {
   std::string mesh, sel, def, scene, resolution = "10k";
+  bool force = false;  // --force: an output may replace an input file
   void add_to(CLI::App& cmd);
+  // Before any work: output (named by option, e.g. "-o") has a known mesh format and can be written
+  // (check_writable), and is none of the inputs (the edit's files and other_inputs) unless --force.
+  // Throws InvalidInput naming the option and the path.
+  void check_output(const std::string& output, const char* option,
+                    const std::vector<std::string>& other_inputs = {}) const;
   // Loads the files or builds the scene. Throws InvalidInput naming the file or the mismatch. Without
   // need_transforms, --def may be omitted (transforms stay empty); without need_region, --sel too (the
   // region stays empty).

@@ -1,4 +1,5 @@
 // msdeform: command-line front end of the msdeform library.
+#include <filesystem>
 #include <iostream>
 
 #include "apps/msdeform/commands.h"
@@ -30,6 +31,12 @@ int main(int argc, char** argv) {
   } catch (const std::bad_alloc&) {
     std::cerr << "msdeform: error: out of memory\n";
     return 1;
+  } catch (const std::filesystem::filesystem_error& e) {  // a path that cannot even be examined
+    std::cerr << "msdeform: error: " << e.path1().string() << ": " << e.code().message() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "msdeform: internal error: " << e.what() << " (please report it with the command line)\n";
+    return 2;
   }
   return 0;
 }

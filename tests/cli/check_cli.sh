@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# The msdeform program with bad paths and outputs, and with seams (ctest test cli_paths_and_outputs;
+# issue 14, kinds 5 and 6): clear errors before any work and never a crash (exit 1, not 134), inputs never
+# replaced unless --force, read-only outputs kept, a non-zero exit when a comparison run failed, and a
+# mesh split along a seam warned about and welded with --weld while the file keeps its vertices.
+# Usage: check_cli.sh MSDEFORM WORK_DIR
+set -uo pipefail
+msdeform="$1"
+work="$2"
+rm -rf "$work"
+mkdir -p "$work"
+cd "$work" || exit 1
+fail() { echo "check_cli: FAILED: $*" >&2; exit 1; }
+# expect_error EXIT_CODE TEXT command...: the command exits with EXIT_CODE and prints TEXT on stderr.
+expect_error() {
+  local code="$1" text="$2"
+  shift 2
+  "$@" >out.txt 2>err.txt
+  local got=$?
+  [ "$got" = "$code" ] || { cat err.txt; fail "'$*' exited $got, expected $code"; }
+  grep -qF -- "$text" err.txt || { cat err.txt; fail "'$*' did not say: $text"; }
+}
+"$msdeform" scene lift --resolution 2k -o . >/dev/null || fail "scene lift"
+
+# Paths that cannot even be examined: a symlink loop, a name over 255 bytes.
+ln -s loop-b.off loop-a.off
+ln -s loop-a.off loop-b.off
+expect_error 1 "loop-a.off" "$msdeform" info loop-a.off
+long=$(printf 'a%.0s' $(seq 300)).off
+expect_error 1 "File name too long" "$msdeform" info "$long"
+expect_error 1 "Too many levels of symbolic links" "$msdeform" deform loop-a.off --sel lift.sel --def lift.def -o x.off
+
+# Outputs are checked before any work.
+expect_error 1 "nothing was computed" "$msdeform" deform --scene lift --method shell -o missing-folder/x.off
+cp lift.off input.off
+expect_error 1 "is one of the inputs" "$msdeform" deform input.off --sel lift.sel --def lift.def -o input.off --method shell
+cmp -s input.off lift.off || fail "the input was changed by a refused run"
+"$msdeform" deform input.off --sel lift.sel --def lift.def -o input.off --force --method shell >/dev/null ||
+  fail "--force did not let the output replace the input"
+cmp -s input.off lift.off && fail "--force ran but the input is unchanged"
+cp lift.off readonly.off
+chmod a-w readonly.off
+expect_error 1 "is read-only" "$msdeform" deform --scene lift --method shell -o readonly.off
+cmp -s readonly.off lift.off || fail "a read-only output was replaced"
+mkdir folder.off
+expect_error 1 "is a folder" "$msdeform" deform --scene lift --method shell -o folder.off
+# A legal name of 250 bytes is written (the temporary file used to add a suffix past 255).
+name=$(printf 'b%.0s' $(seq 246)).off
+"$msdeform" deform --scene lift --resolution 2k --method shell -o "$name" >/dev/null || fail "a 250-byte output name"
+[ -s "$name" ] || fail "the 250-byte output was not written"
+
+# Option ranges read as ranges.
+expect_error 105 "not in range 1 to 1000000" "$msdeform" deform --scene lift --method arap --iterations 0 -o x.off
+
+# compare: a run that fails makes the exit status non-zero (the pages are still written).
+printf 'OFF\n4 0 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n' >cloud.off
+printf '0\n1\n1\n2\n' >cloud.sel
+printf '1 0 0 0\n0 1 0 0\n0 0 1 0.1\n0 0 0 1\n' >cloud.def
+expect_error 1 "runs failed" "$msdeform" compare --mesh cloud.off --sel cloud.sel --def cloud.def --methods shell,rbf -o cmp
+[ -s cmp/index.html ] || fail "compare wrote no index.html"
+
+# Seams: the plane with its right half on its own copies of the cut's vertices.
+python3 - <<'PY' || fail "could not write the split plane"
+lines = open("lift.off").read().split("\n")
+nv, nf = map(int, lines[1].split()[:2])
+verts = [list(map(float, l.split()[:3])) for l in lines[2:2 + nv]]
+faces = [list(map(int, l.split()[1:4])) for l in lines[2 + nv:2 + nv + nf]]
+copy = {}
+for f in faces:
+    if sum(verts[v][0] for v in f) / 3 < 0.5:
+        continue
+    for k, v in enumerate(f):
+        if abs(verts[v][0] - 0.5) < 1e-3:
+            if v not in copy:
+                copy[v] = len(verts)
+                verts.append(verts[v])
+            f[k] = copy[v]
+labels = [l.split("#")[0].strip() for l in open("lift.sel")]
+labels = [l for l in labels if l]
+labels += [labels[v] for v in sorted(copy, key=copy.get)]
+with open("split.off", "w") as out:
+    out.write(f"OFF\n{len(verts)} {len(faces)} 0\n")
+    out.writelines(f"{x!r} {y!r} {z!r}\n" for x, y, z in verts)
+    out.writelines(f"3 {a} {b} {c}\n" for a, b, c in faces)
+open("split.sel", "w").write("\n".join(labels) + "\n")
+PY
+"$msdeform" info split.off | grep -q "seam vertices  *[1-9]" || fail "info does not count the seam"
+"$msdeform" deform split.off --sel split.sel --def lift.def --method shell -o apart.off >/dev/null 2>err.txt ||
+  fail "deform of the split plane"
+grep -q "split along seams" err.txt || fail "no seam warning"
+"$msdeform" deform split.off --sel split.sel --def lift.def --method shell --weld 0 -o welded.off >out.txt 2>err.txt ||
+  { cat err.txt; fail "deform --weld 0"; }
+grep -q "welded" out.txt || fail "--weld printed nothing"
+grep -q "split along seams" err.txt && fail "a seam warning after welding"
+[ "$(sed -n 2p welded.off | cut -d' ' -f1)" = "$(sed -n 2p split.off | cut -d' ' -f1)" ] ||
+  fail "--weld changed the vertex count of the output"
+echo "check_cli: passed"

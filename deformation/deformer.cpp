@@ -1,9 +1,12 @@
 #include "msdeform/deformation/deformer.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/mesh.h"
 
 namespace msd {
 
@@ -26,12 +29,31 @@ void affine_targets(const Positions& rest, const std::vector<int>& constrained, 
   }
 }
 
+namespace {
+constexpr double kMinExtent = 1e-70, kMaxExtent = 1e70;
+std::string format_number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", x);
+  return text;
+}
+}  // namespace
+
 void Deformer::prepare(const Positions& P, const Faces& F, const Region& region) {
   prepared_ = false;
   frame_report_ = {};
   prepare_warnings_.clear();
   const bool surface = traits().domain == DeformerDomain::Surface;
   check_mesh_arrays(P, F, name().c_str());
+  // Finite coordinates can still overflow (or underflow) the squared areas computed from them at sizes
+  // around 1e±150; say so rather than let a solver blame degenerate triangles. Sizes from 1e-70 to 1e70
+  // keep areas squared inside a double.
+  const double diagonal = P.rows() > 0 ? bounding_box_diagonal(P) : 0;
+  const double extent = std::max(diagonal, P.rows() > 0 ? P.cwiseAbs().maxCoeff() : 0.0);
+  if (!(extent < kMaxExtent) || (diagonal > 0 && diagonal < kMinExtent))
+    throw InvalidInput(name() + ": coordinates too " + (extent < kMaxExtent ? "small" : "large") +
+                       ": the bounding-box diagonal is " + format_number(diagonal) + " and the largest |coordinate| " +
+                       format_number(extent) + "; msdeform works with sizes from 1e-70 to 1e70 (squared areas must fit "
+                       "a double): rescale the input");
   if (surface && F.rows() == 0)
     throw InvalidInput(name() + ": a surface method needs triangles, and the input has none");
   region.validate(static_cast<int>(P.rows()), surface ? &F : nullptr);
@@ -136,6 +158,43 @@ void Deformer::evaluate(const Positions& points, Positions& out) const {
 
 void Deformer::do_evaluate(const Positions&, Positions&) const {
   throw UsageError(name() + ": declares itself a space method but cannot evaluate its map");
+}
+
+void LocalFrameDeformer::do_prepare(const Positions& P, const Faces& F, const Region& region) {
+  local_ = LocalFrame::of(P);
+  prepare_local(local_.to_local(P), F, region);
+  rest_ = P;
+  constrained_ = region.constrained_vertices();
+  handle_of_.resize(constrained_.size());
+  for (size_t c = 0; c < constrained_.size(); ++c) handle_of_[c] = region.handle_of(constrained_[c]);
+  targets_.resize(static_cast<Eigen::Index>(constrained_.size()), 3);
+}
+
+void LocalFrameDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
+  local_.to_local(transforms, local_transforms_);
+  deform_local(local_transforms_, out);
+  local_.to_world(out);
+  affine_targets(rest_, constrained_, handle_of_, transforms, targets_);
+  for (size_t c = 0; c < constrained_.size(); ++c) out.row(constrained_[c]) = targets_.row(static_cast<Eigen::Index>(c));
+}
+
+void LocalFrameDeformer::do_set_initial_guess(const Positions& X) { set_initial_guess_local(local_.to_local(X)); }
+
+LocalFrame LocalFrame::of(const Positions& P) {
+  LocalFrame f;
+  if (P.rows() == 0) return f;
+  const Vec3 lo = P.colwise().minCoeff().transpose(), hi = P.colwise().maxCoeff().transpose();
+  f.centre = 0.5 * (lo + hi);
+  const double diagonal = (hi - lo).norm();
+  f.scale = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1;
+  return f;
+}
+
+Mat4 LocalFrame::to_local(const Mat4& T) const {
+  Mat4 out = T;
+  // N T N⁻¹ x̂ = (A (scale x̂ + centre) + t − centre) / scale = A x̂ + (A centre + t − centre) / scale
+  out.topRightCorner<3, 1>() = (T.topLeftCorner<3, 3>() * centre + T.topRightCorner<3, 1>() - centre) / scale;
+  return out;
 }
 
 }  // namespace msd

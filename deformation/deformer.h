@@ -140,6 +140,53 @@ class Deformer {
   int num_handles_ = 0, num_vertices_ = 0, num_constrained_ = 0;
 };
 
+//! A centred, normalised frame x̂ = (x − centre) / scale (centre and diagonal of the bounding box), for
+//! methods whose tolerances or damping are absolute: working in it makes them translation- and
+//! scale-equivariant (issue 14: a shape 1e6 from the origin, or modelled in 1e-30 units, is the same edit).
+struct LocalFrame {
+  Vec3 centre = Vec3::Zero();
+  double scale = 1;
+  //! The frame of P (#V by 3): its bounding box's centre and diagonal (1 when all points coincide).
+  static LocalFrame of(const Positions& P);
+  Positions to_local(const Positions& X) const { return (X.rowwise() - centre.transpose()) / scale; }
+  //! In place, allocation-free.
+  void to_world(Positions& X) const {
+    X *= scale;
+    X.rowwise() += centre.transpose();
+  }
+  //! T̂ = N T N⁻¹ with N(x) = (x − centre) / scale: the same motion in the local frame.
+  Mat4 to_local(const Mat4& T) const;
+  //! Every transform, into out (resized; no allocation once it has the size).
+  void to_local(const std::vector<Mat4>& T, std::vector<Mat4>& out) const {
+    out.resize(T.size());
+    for (size_t k = 0; k < T.size(); ++k) out[k] = to_local(T[k]);
+  }
+};
+
+//! A deformer whose solver works in the shape's centred, normalised frame (LocalFrame), for methods whose
+//! tolerances, damping or rank tests are absolute (PriMo, Laplacian editing). Subclasses implement the
+//! *_local functions on local coordinates; positions, transforms and guesses are mapped in and results
+//! mapped out here, with the constrained vertices placed exactly at p or T_k·p in the caller's frame (the
+//! round trip through the local frame would move them by rounding). Reports that are ratios (residuals,
+//! scale checks) are the same in either frame.
+class LocalFrameDeformer : public Deformer {
+ protected:
+  void do_prepare(const Positions& P, const Faces& F, const Region& region) final;
+  void do_deform(const std::vector<Mat4>& transforms, Positions& out) final;
+  void do_set_initial_guess(const Positions& X) final;
+  virtual void prepare_local(const Positions& P, const Faces& F, const Region& region) = 0;
+  virtual void deform_local(const std::vector<Mat4>& transforms, Positions& out) = 0;
+  //! Default: no initial guess (Deformer's UsageError).
+  virtual void set_initial_guess_local(const Positions& X) { Deformer::do_set_initial_guess(X); }
+  const LocalFrame& local_frame() const { return local_; }
+
+ private:
+  LocalFrame local_;
+  std::vector<Mat4> local_transforms_;
+  Positions rest_, targets_;  // the caller's frame
+  std::vector<int> constrained_, handle_of_;
+};
+
 //! Throws InvalidInput unless every transform is finite with last row (0 0 0 1); `who` prefixes the message.
 void check_affine(const std::vector<Mat4>& transforms, const std::string& who);
 

@@ -28,7 +28,7 @@ Positions rest_laplace_coordinates(const LaplaceOperator& lap, const Positions& 
 }
 }  // namespace
 
-void LaplacianEditing::do_prepare(const Positions& P, const Faces& F, const Region& region) {
+void LaplacianEditing::prepare_local(const Positions& P, const Faces& F, const Region& region) {
   rest_ = P;
   constrained_ = region.constrained_vertices();
   handle_of_constrained_.resize(constrained_.size());
@@ -75,8 +75,14 @@ void LaplacianEditing::prepare_implicit(const Positions& P, const Faces& F, cons
       const int m = 1 + rings.degree(i);
       A.setZero(3 * m, 7);
       auto ring = [&](int r) { return r == 0 ? static_cast<int>(i) : rings.begin(i)[r - 1]; };
+      // The ring in units of its own size ℓ: the similarity columns and the translation columns then have
+      // comparable norms, so the pseudo-inverse's rank test does not drop the similarity of a mesh modelled
+      // in tiny (or huge) units. The fit gives (ℓs, ℓh, t); C divides ℓ out again.
+      double ell = 0;
+      for (int r = 1; r < m; ++r) ell = std::max(ell, (P.row(ring(r)) - P.row(i)).norm());
+      if (!(ell > 0)) ell = 1;
       for (int r = 0; r < m; ++r) {
-        const Vec3 q = P.row(ring(r)) - P.row(i);
+        const Vec3 q = (P.row(ring(r)) - P.row(i)) / ell;
         A.row(3 * r + 0) << q.x(), 0, q.z(), -q.y(), 1, 0, 0;
         A.row(3 * r + 1) << q.y(), -q.z(), 0, q.x(), 0, 1, 0;
         A.row(3 * r + 2) << q.z(), q.y(), -q.x(), 0, 0, 0, 1;
@@ -87,7 +93,7 @@ void LaplacianEditing::prepare_implicit(const Positions& P, const Faces& F, cons
       Eigen::Matrix<double, 3, 4> E;
       E.col(0) = dl;
       E.block<3, 3>(0, 1) << 0, dl.z(), -dl.y(), -dl.z(), 0, dl.x(), dl.y(), -dl.x(), 0;
-      const Eigen::MatrixXd C = root * (E * pinv.topRows<4>());  // 3 by 3m
+      const Eigen::MatrixXd C = (root / ell) * (E * pinv.topRows<4>());  // 3 by 3m
       for (int r = 0; r < m; ++r)
         for (int a = 0; a < 3; ++a)
           for (int d = 0; d < 3; ++d)
@@ -138,7 +144,7 @@ void LaplacianEditing::prepare_explicit(const Positions& P, const Faces& F, cons
   frame_.prepare(system_, 3);
 }
 
-void LaplacianEditing::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
+void LaplacianEditing::deform_local(const std::vector<Mat4>& transforms, Positions& out) {
   Eigen::MatrixXd& known = frame_.known();
   Eigen::MatrixXd& rhs = frame_.rhs();
   for (size_t c = 0; c < constrained_.size(); ++c) {

@@ -41,7 +41,9 @@ struct LaplacianEditingOptions {
 //! Explicit: minimise Σ_i A_i ‖Δp'_i − M_i δ_i‖², i.e. (W M⁻¹ W) p' = W δ' on the free rows (the shell
 //! matrix Q₂, per coordinate), factored once; M_i as in GradientEditing from per-vertex harmonic weights.
 //! Translation-insensitive like gradient editing.
-class LaplacianEditing : public Deformer {
+//! (A LocalFrameDeformer: Laplace coordinates of a shape far from the origin would lose their digits to
+//! cancellation, and the local similarity fits their rank in tiny units.)
+class LaplacianEditing : public LocalFrameDeformer {
  public:
   explicit LaplacianEditing(LaplacianEditingOptions options = {});
   const std::string& name() const override { return name_; }
@@ -56,8 +58,8 @@ class LaplacianEditing : public Deformer {
  protected:
   //! \throw SolverError naming the vertex when the system is singular (e.g. a free vertex whose faces all
   //! have zero area).
-  void do_prepare(const Positions& P, const Faces& F, const Region& region) override;
-  void do_deform(const std::vector<Mat4>& transforms, Positions& out) override;
+  void prepare_local(const Positions& P, const Faces& F, const Region& region) override;
+  void deform_local(const std::vector<Mat4>& transforms, Positions& out) override;
 
  private:
   void prepare_implicit(const Positions& P, const Faces& F, const Region& region);

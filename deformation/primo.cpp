@@ -60,7 +60,7 @@ Vec3 PrimoDeformer::gauss_point(const Edge& e, int m) const {
          u * (rest_.row(e.b).transpose() + s * normals_.row(e.b).transpose());
 }
 
-void PrimoDeformer::do_prepare(const Positions& P, const Faces& F, const Region& region) {
+void PrimoDeformer::prepare_local(const Positions& P, const Faces& F, const Region& region) {
   rest_ = P;
   faces_ = F;
   const int nv = static_cast<int>(P.rows()), nf = static_cast<int>(F.rows());
@@ -207,7 +207,7 @@ void PrimoDeformer::do_reset() {
   energies_.clear();
 }
 
-void PrimoDeformer::do_set_initial_guess(const Positions& X) {
+void PrimoDeformer::set_initial_guess_local(const Positions& X) {
   // Each free prism: the rigid fit of its six rest corners p ± (h/2)n to the guess's corners X ± (h/2)n'.
   const Positions guess_normals = vertex_normals(X, faces_);
   const long nf = faces_.rows();
@@ -270,7 +270,7 @@ double PrimoDeformer::energy() {
   return total;
 }
 
-void PrimoDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
+void PrimoDeformer::deform_local(const std::vector<Mat4>& transforms, Positions& out) {
   affine_targets(rest_, constrained_, handle_of_, transforms, targets_);
   fit_constrained(targets_);
 

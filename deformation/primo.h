@@ -53,7 +53,8 @@ struct PrimoOptions {
 //! twist ends in a folded local minimum. Warm start: the next
 //! frame starts from the last one's prisms. The vertices are the mean of the incident prisms' copies of
 //! them; constrained vertices are placed exactly.
-class PrimoDeformer : public Deformer {
+//! (A LocalFrameDeformer: the damping, energy floor and stage tolerances are absolute numbers.)
+class PrimoDeformer : public LocalFrameDeformer {
  public:
   //! \throw InvalidInput for a thickness that is not finite and > 0, max_iterations < 1 or a tolerance
   //! that is negative or not finite.
@@ -65,17 +66,19 @@ class PrimoDeformer : public Deformer {
   const PrimoOptions& options() const { return options_; }
 
   //! The energy E after each iteration of the last continuation stage of the last frame (the one with the
-  //! target constraints), preceded by the energy it started from; empty before the first frame.
+  //! target constraints), preceded by the energy it started from; empty before the first frame. Measured
+  //! in the shape's normalised frame (centred, bounding-box diagonal 1), like the whole solve, so the
+  //! method does not depend on where the shape sits or the units it is modelled in.
   const std::vector<double>& energy_history() const { return energies_; }
   //! Prism thickness in mesh units (thickness × mean edge length), after prepare().
-  double prism_height() const { return height_; }
+  double prism_height() const { return height_ * local_frame().scale; }
 
  protected:
   //! \throw TopologyError when no face has all three vertices constrained, or a group of free faces is
   //! not coupled through edges to a constrained face (its rigid motion would be undetermined).
-  void do_prepare(const Positions& P, const Faces& F, const Region& region) override;
-  void do_deform(const std::vector<Mat4>& transforms, Positions& out) override;
-  void do_set_initial_guess(const Positions& X) override;
+  void prepare_local(const Positions& P, const Faces& F, const Region& region) override;
+  void deform_local(const std::vector<Mat4>& transforms, Positions& out) override;
+  void set_initial_guess_local(const Positions& X) override;
   void do_reset() override;
 
  private:

@@ -97,7 +97,12 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, cons
 struct ClosestPointQuery::Impl {
   Positions P;
   Faces F;
-  double max_abs_coordinate = 0;
+  // Embree sees the mesh in single precision in a centred, normalised frame x̂ = (x − centre) / scale,
+  // where floats keep their digits wherever the mesh sits (1e20 from the origin, all its vertices rounded
+  // to one float, used to leave queries with no triangle at all).
+  Vec3 centre = Vec3::Zero();
+  double scale = 1;
+  double max_abs_coordinate = 0;  // in the normalised frame
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
 
@@ -113,7 +118,8 @@ struct QueryState {
   const Positions* P;
   const Faces* F;
   Vec3 p;
-  float slack;  // covers the float rounding of Embree's vertex copy and of the query centre
+  double scale;  // of the normalised frame: Embree's radii are in its units
+  float slack;   // covers the float rounding of Embree's vertex copy and of the query centre
   ClosestPoint best;
 };
 
@@ -132,7 +138,7 @@ bool point_query_callback(RTCPointQueryFunctionArguments* args) {
   state->best.barycentric = bary;
   state->best.point = q;
   state->best.squared_distance = d2;
-  const float radius = std::nextafter(static_cast<float>(std::sqrt(d2)) + state->slack, FLT_MAX);
+  const float radius = std::nextafter(static_cast<float>(std::sqrt(d2) / state->scale) + state->slack, FLT_MAX);
   if (radius < args->query->radius) {
     args->query->radius = radius;
     return true;
@@ -182,7 +188,13 @@ void ClosestPointQuery::build(const Positions& P, const Faces& F) {
   auto impl = std::make_unique<Impl>();
   impl->P = P;
   impl->F = F;
-  impl->max_abs_coordinate = P.rows() > 0 ? P.cwiseAbs().maxCoeff() : 0.0;
+  if (P.rows() > 0) {
+    const Vec3 lo = P.colwise().minCoeff().transpose(), hi = P.colwise().maxCoeff().transpose();
+    impl->centre = 0.5 * (lo + hi);
+    const double diagonal = (hi - lo).norm();
+    impl->scale = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1;
+    impl->max_abs_coordinate = ((P.rowwise() - impl->centre.transpose()) / impl->scale).cwiseAbs().maxCoeff();
+  }
   impl->device = rtcNewDevice(nullptr);
   if (!impl->device)
     throw Error("ClosestPointQuery::build: Embree device creation failed: " + embree_error(nullptr));
@@ -204,7 +216,7 @@ void ClosestPointQuery::build(const Positions& P, const Faces& F) {
     throw Error("ClosestPointQuery::build: Embree buffer allocation failed: " + why);
   }
   for (Eigen::Index v = 0; v < P.rows(); ++v)
-    for (int k = 0; k < 3; ++k) vertices[3 * v + k] = static_cast<float>(P(v, k));
+    for (int k = 0; k < 3; ++k) vertices[3 * v + k] = static_cast<float>((P(v, k) - impl->centre[k]) / impl->scale);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) indices[3 * f + k] = static_cast<unsigned>(F(f, k));
   rtcCommitGeometry(geometry);
@@ -218,18 +230,29 @@ void ClosestPointQuery::build(const Positions& P, const Faces& F) {
 
 ClosestPoint ClosestPointQuery::query(const Vec3& p) const {
   if (!impl_) throw UsageError("ClosestPointQuery::query: called before build()");
-  QueryState state{&impl_->P, &impl_->F, p, 0.0f, ClosestPoint{}};
-  const double magnitude = std::max(impl_->max_abs_coordinate, p.cwiseAbs().maxCoeff());
+  QueryState state{&impl_->P, &impl_->F, p, impl_->scale, 0.0f, ClosestPoint{}};
+  const Vec3 local = (p - impl_->centre) / impl_->scale;
+  const double magnitude = std::max(impl_->max_abs_coordinate, local.cwiseAbs().maxCoeff());
   state.slack = static_cast<float>(8.0 * FLT_EPSILON * magnitude) + FLT_MIN;
   RTCPointQuery query;
-  query.x = static_cast<float>(p.x());
-  query.y = static_cast<float>(p.y());
-  query.z = static_cast<float>(p.z());
+  query.x = static_cast<float>(local.x());
+  query.y = static_cast<float>(local.y());
+  query.z = static_cast<float>(local.z());
   query.time = 0.0f;
   query.radius = std::numeric_limits<float>::infinity();
   RTCPointQueryContext context;
   rtcInitPointQueryContext(&context);
   rtcPointQuery(impl_->scene, &query, &context, point_query_callback, &state);
+  if (state.best.face < 0) {  // a query beyond float range of the frame: every triangle, exactly
+    for (Eigen::Index f = 0; f < impl_->F.rows(); ++f) {
+      Vec3 bary;
+      const Vec3 q = closest_point_on_triangle(p, impl_->P.row(impl_->F(f, 0)), impl_->P.row(impl_->F(f, 1)),
+                                               impl_->P.row(impl_->F(f, 2)), bary);
+      const double d2 = (p - q).squaredNorm();
+      if (d2 < state.best.squared_distance || state.best.face < 0)
+        state.best = ClosestPoint{static_cast<int>(f), bary, q, d2};
+    }
+  }
   return state.best;
 }
 

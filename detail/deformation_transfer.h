@@ -96,6 +96,7 @@ class DeformationTransfer : public DetailEncoding {
   //! The vertices held fixed in the solve (anchors, then pinned vertices), in solve order.
   const std::vector<int>& constrained_vertices() const { return system_.known(); }
   const NormalDisplacements& normal_displacements() const { return normal_; }
+  std::vector<std::string> encode_warnings() const override { return normal_.encode_warnings(); }
 
  private:
   void check_result(const Positions& B_deformed, const Positions& out) const;

@@ -205,6 +205,7 @@ class DisplacementVolumes : public DetailEncoding {
   const Eigen::VectorXd& heights() const { return height_; }
   //! The normal displacements that give the base points, normals and encoded heights.
   const NormalDisplacements& normal_displacements() const { return normal_; }
+  std::vector<std::string> encode_warnings() const override { return normal_.encode_warnings(); }
 
  private:
   void base_frames(const Positions& B);  // frame_ (b and n per vertex) on base B

@@ -26,6 +26,8 @@ class DetailEncoding {
   virtual int last_iterations() const { return 0; }
   virtual double last_residual() const { return -1; }
   virtual bool last_converged() const { return true; }
+  //! What encode() could not do exactly, in words (e.g. vertices whose base point search fell back).
+  virtual std::vector<std::string> encode_warnings() const { return {}; }
   //! Vertices of S that an edit constrains (fixed and handle vertices). Encodings that solve a global
   //! system for S' (deformation transfer) use them as Dirichlet constraints; the others ignore them.
   //! Call before encode(). \throw InvalidInput on an index out of range at encode().

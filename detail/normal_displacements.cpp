@@ -130,13 +130,16 @@ struct BasePointSearch {
     const Vec3 a = B.row(ia), b = B.row(ib), c = B.row(ic);
     const Vec3 na = N.row(ia), nb = N.row(ib), nc = N.row(ic);
     const Vec3 m = w[0] * na + w[1] * nb + w[2] * nc;
-    const Vec3 d = p - (w[0] * a + w[1] * b + w[2] * c);
+    // p − x from differences to corner a (w sums to 1): far from the origin, p − (w·(a, b, c)) would cancel
+    // the coordinates' leading digits and leave rounding above the tolerance (no convergence at 1e6).
+    const Vec3 ba = b - a, ca = c - a;
+    const Vec3 d = (p - a) - w[1] * ba - w[2] * ca;
     const double m_len = m.norm();
     if (!(m_len > phong::kMinNormalLength)) return Newton::Failed;
     const Vec3 r = d.cross(m);
     if (may_stop && r.norm() <= tolerance * m_len) return Newton::Converged;
-    const Vec3 ja = d.cross(na - nc) - (a - c).cross(m);
-    const Vec3 jb = d.cross(nb - nc) - (b - c).cross(m);
+    const Vec3 ja = d.cross(na - nc) + ca.cross(m);         // (a − c) = −ca
+    const Vec3 jb = d.cross(nb - nc) - (ba - ca).cross(m);  // (b − c) = ba − ca
     const double A = ja.squaredNorm(), Bc = ja.dot(jb), C = jb.squaredNorm();
     const double det = A * C - Bc * Bc;
     if (!(det > 1e-24 * A * C)) return Newton::Failed;
@@ -301,6 +304,18 @@ Eigen::VectorXd normal_displacement_heights(const Positions& S, const Positions&
   NormalDisplacements encoding(options);
   encoding.encode(S, Faces(), B, Fb);
   return encoding.heights();
+}
+
+std::vector<std::string> NormalDisplacements::encode_warnings() const {
+  if (report_.fallback == 0) return {};
+  std::string ids;
+  for (size_t k = 0; k < report_.fallback_vertices.size() && k < 5; ++k)
+    ids += (k ? ", " : "") + std::to_string(report_.fallback_vertices[k]);
+  return {"normal displacements: " + std::to_string(report_.fallback) + " of " +
+          std::to_string(report_.fallback + report_.converged) +
+          " vertices found no base point along the base's normals (Newton did not converge) and were encoded "
+          "from their closest point on B, so the details there are not reproduced exactly (vertices " + ids +
+          (report_.fallback > 5 ? ", ..." : "") + "); a smoother base (a larger detail scale) usually removes them"};
 }
 
 }  // namespace msd

@@ -68,6 +68,8 @@ class NormalDisplacements : public DetailEncoding {
   bool encoded() const { return num_base_vertices_ >= 0; }
   const NormalDisplacementOptions& options() const { return options_; }
   const EncodeReport& report() const { return report_; }
+  //! One sentence when some vertices fell back to their closest point (count and the first ids).
+  std::vector<std::string> encode_warnings() const override;
   //! #Vs face indices into Fb: the base triangle of each vertex of S.
   const Eigen::VectorXi& base_faces() const { return face_; }
   //! #Vs by 3 barycentrics (α, β, γ) in that triangle (sum 1; each ≥ −1e-10 for converged vertices).

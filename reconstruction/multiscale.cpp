@@ -42,7 +42,10 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
   }
   for (const std::string& w : base_deformer_->prepare_warnings()) prepare_warnings_.push_back(w);
   encoding_->set_anchor_vertices(region.constrained_vertices());
-  if (!d.base_is_input) encoding_->encode(S, F, d.base, d.base_faces);  // D = S ⊖ B
+  if (!d.base_is_input) {
+    encoding_->encode(S, F, d.base, d.base_faces);  // D = S ⊖ B
+    for (const std::string& w : encoding_->encode_warnings()) prepare_warnings_.push_back(name_ + ": " + w);
+  }
   edit_deformed_ = d.edit;
   base_deformed_ = d.base;
   rest_ = S;

@@ -28,7 +28,8 @@ class LatticeDeformer : public Deformer {
     rest_ = P;
     lo_ = P.colwise().minCoeff().transpose();
     const Vec3 hi = P.colwise().maxCoeff().transpose();
-    size_ = ((hi - lo_) * 1.02).cwiseMax(1e-12);
+    const double diagonal = (hi - lo_).norm() > 0 ? (hi - lo_).norm() : 1.0;
+    size_ = ((hi - lo_) * 1.02).cwiseMax(1e-12 * diagonal);  // relative: a shape in 1e-30 units is a shape
     lo_ -= 0.01 * (hi - lo_);
     constrained_ = region.constrained_vertices();
     handle_of_.clear();

@@ -139,6 +139,43 @@ TEST_CASE("conformance: a rigid motion (a translation for every method) of all c
   });
 }
 
+// Issue 14, kind 3: where the shape sits and the units it is modelled in change nothing. The edit of the
+// bumpy plane, moved by an offset o and scaled by s (transforms conjugated), must give s·(the unit
+// result) + o, to rounding: double precision keeps ~16 digits of |o|/s, iterative methods their tolerance.
+TEST_CASE("conformance: every method is translation- and scale-equivariant (offsets to 1e8, scales 1e-30 to 1e15)",
+          "[conformance][equivariance]") {
+  SceneOptions options;
+  options.resolution = 600;
+  const Scene s = make_scene("lift", options);
+  const double diag = bounding_box_diagonal(s.P);
+  struct Case {
+    double scale, offset;
+  };
+  const Case cases[] = {{1, 1e4}, {1, 1e6}, {1, 1e8}, {1e-30, 0}, {1e-10, 0}, {1e6, 0}, {1e15, 0}, {1e-30, 1e-24}};
+  for_every_method([&](Deformer& d) {
+    d.prepare(s.P, s.F, s.region);
+    const Positions unit = d.deform(s.transforms);
+    const bool iterative = d.traits().solve == DeformerSolve::Iterative;
+    for (const Case& c : cases) {
+      INFO("scale " << c.scale << ", offset " << c.offset);
+      const Vec3 o = Vec3::Constant(c.offset);
+      Mat4 N = Mat4::Identity();  // x -> s x + o
+      N.topLeftCorner<3, 3>() *= c.scale;
+      N.topRightCorner<3, 1>() = o;
+      std::vector<Mat4> moved;
+      for (const Mat4& T : s.transforms) moved.push_back(N * T * N.inverse());
+      std::unique_ptr<Deformer> e = catalogue().make(d.name());
+      e->prepare((c.scale * s.P).rowwise() + o.transpose(), s.F, s.region);
+      const Positions out = e->deform(moved);
+      REQUIRE(out.allFinite());
+      const Positions back = (out.rowwise() - o.transpose()) / c.scale;
+      const double error = test::max_row_distance(back, unit) / diag;
+      const double allowed = (iterative ? 1e-4 : 1e-7) + 1e-12 * c.offset / c.scale;
+      CHECK(error <= allowed);
+    }
+  });
+}
+
 TEST_CASE("conformance: explicit targets equal the affine frame, and linear frames allocate nothing", "[conformance]") {
   SceneOptions o;  // the lifted bumpy plane: no method folds a triangle there, so no frame has a warning
   o.resolution = 2500;

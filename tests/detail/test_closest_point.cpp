@@ -1,6 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <random>
+#include <utility>
 
 #include "msdeform/core/errors.h"
 #include "msdeform/detail/closest_point.h"
@@ -126,6 +128,30 @@ TEST_CASE("ClosestPointQuery is exact where Embree's float copy is not", "[detai
   const ClosestPoint below = query.query(Vec3(1000.2, 1000.2, -1.0));
   CHECK(below.face == 0);
   CHECK(below.point.z() == 0.0);
+}
+
+// Issue 14, kind 3: a mesh 1e20 from the origin (all its vertices one float) found no triangle (face −1,
+// then a crash in multi-scale); tiny and huge meshes too. The answer must be the shifted / scaled one.
+TEST_CASE("ClosestPointQuery works wherever the mesh sits and whatever its units", "[detail][closest]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  Positions P(40, 3);
+  for (Eigen::Index v = 0; v < P.rows(); ++v) P.row(v) << u(rng), u(rng), 0.1 * u(rng);
+  Faces F(20, 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) F.row(f) << 2 * f, 2 * f + 1, (2 * f + 2) % 40;
+  const ClosestPointQuery unit(P, F);
+  const std::pair<double, double> cases[] = {{1e16, 1e20}, {1.0, 1e8}, {1e-30, 0.0}, {1e30, 0.0}, {1e-6, 1.0}};
+  for (const auto& [scale, offset] : cases) {
+    INFO("scale " << scale << ", offset " << offset);
+    const Positions moved = (scale * P).array() + offset;
+    const ClosestPointQuery query(moved, F);
+    for (int i = 0; i < 20; ++i) {
+      const Vec3 q(u(rng), u(rng), u(rng) - 0.5);
+      const ClosestPoint a = unit.query(q), b = query.query((scale * q).array() + offset);
+      REQUIRE(b.face >= 0);
+      CHECK(std::sqrt(b.squared_distance) / scale == Approx(std::sqrt(a.squared_distance)).margin(1e-9 + 1e-15 * offset / scale));
+    }
+  }
 }
 
 TEST_CASE("ClosestPointQuery reports bad input and use", "[detail][closest][bad-input]") {

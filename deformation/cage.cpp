@@ -316,8 +316,9 @@ struct HarmonicCoordinates::Impl {
 HarmonicCoordinates::HarmonicCoordinates(const Positions& cage_P, const Faces& cage_F, int resolution)
     : impl_(std::make_unique<Impl>()) {
   const char* who = "harmonic coordinates";
-  if (resolution < 4 || resolution > 1024)
-    throw InvalidInput(std::string(who) + ": the resolution must be in 4..1024 cells (got " +
+  if (resolution < 4 || resolution > CageOptions::kMaxHarmonicResolution)
+    throw InvalidInput(std::string(who) + ": the resolution must be in 4.." +
+                       std::to_string(CageOptions::kMaxHarmonicResolution) + " cells (got " +
                        std::to_string(resolution) + ")");
   const auto t0 = std::chrono::steady_clock::now();
   Impl& g = *impl_;
@@ -416,7 +417,7 @@ HarmonicCoordinates::HarmonicCoordinates(const Positions& cage_P, const Faces& c
     throw InvalidInput(std::string(who) + ": " + std::to_string(static_cast<long>(bytes / 1e6)) +
                        " MB of node values (" + std::to_string(inside_nodes.size() + mvc_nodes.size()) +
                        " nodes × " + std::to_string(m) +
-                       " cage vertices); lower the grid resolution (--harmonic-resolution) or use fewer cage vertices");
+                       " cage vertices); lower the grid resolution (harmonic_resolution) or use fewer cage vertices");
   g.row_of.assign(num_nodes, -1);
   int rows = 0;
   for (long id = 0; id < num_nodes; ++id)
@@ -752,8 +753,9 @@ CageDeformer::CageDeformer(CageOptions options) : options_(std::move(options)) {
   if (options_.subdivisions < 0 || options_.subdivisions > 4)
     throw InvalidInput(std::string(who) + ": subdivisions must be in 0..4 (got " +
                        std::to_string(options_.subdivisions) + ")");
-  if (options_.harmonic_resolution < 4 || options_.harmonic_resolution > 1024)
-    throw InvalidInput(std::string(who) + ": harmonic_resolution must be in 4..1024 (got " +
+  if (options_.harmonic_resolution < 4 || options_.harmonic_resolution > CageOptions::kMaxHarmonicResolution)
+    throw InvalidInput(std::string(who) + ": harmonic_resolution must be in 4.." +
+                       std::to_string(CageOptions::kMaxHarmonicResolution) + " (got " +
                        std::to_string(options_.harmonic_resolution) + ")");
   if ((options_.cage_P.rows() == 0) != (options_.cage_F.rows() == 0))
     throw InvalidInput(std::string(who) + ": a user cage needs both cage_P and cage_F (got " +

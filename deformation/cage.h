@@ -34,9 +34,11 @@ struct CageOptions {
   double margin = 0.05;
   //! Generated cage: midpoint (1→4) subdivisions of the 26-DOP's triangles (more control vertices), 0..4.
   int subdivisions = 1;
-  //! Harmonic coordinates: grid cells along the cage's longest bounding-box side (4..1024). Memory is
-  //! about (nodes inside or near the cage) × #cage vertices × 8 bytes.
+  //! Harmonic coordinates: grid cells along the cage's longest bounding-box side (4..kMaxHarmonicResolution).
+  //! Memory is about (nodes inside or near the cage) × #cage vertices × 8 bytes, plus the grid Laplacian's
+  //! factor: 128 takes about 40 s and 4 GB with a 186-vertex cage; 256 failed to factor in 2 GB.
   int harmonic_resolution = 64;
+  static constexpr int kMaxHarmonicResolution = 128;
   LeastNormOptions least_norm;
 };
 
@@ -131,7 +133,7 @@ void mean_value_coordinates(const Positions& cage_P, const Faces& cage_F, const 
 class HarmonicCoordinates {
  public:
   //! cage_P #C×3, cage_F #T×3: closed and consistently oriented (see check_cage()). \throw InvalidInput for
-  //! a resolution outside 4..1024 or a bad cage array; SolverError if the grid system cannot be factored.
+  //! a resolution outside 4..CageOptions::kMaxHarmonicResolution or a bad cage array; SolverError if the grid system cannot be factored.
   HarmonicCoordinates(const Positions& cage_P, const Faces& cage_F, int resolution);
   ~HarmonicCoordinates();
 

@@ -53,7 +53,10 @@ double real_value(py::handle v, const std::string& name) {
 int int_value(py::handle v, const std::string& name) {
   if (py::isinstance<py::bool_>(v) || is_numpy_bool(v) || !PyIndex_Check(v.ptr()))
     throw py::type_error("option " + name + " must be an int, got " + type_name(v));
-  const long long x = v.cast<long long>();
+  const py::int_ index(py::reinterpret_steal<py::object>(PyNumber_Index(v.ptr())));
+  int overflow = 0;
+  const long long x = PyLong_AsLongLongAndOverflow(index.ptr(), &overflow);
+  if (overflow != 0) throw py::value_error("option " + name + " = " + std::string(py::str(py::handle(index))) + " is out of range");
   if (x < INT_MIN || x > INT_MAX) throw py::value_error("option " + name + " = " + std::to_string(x) + " is out of range");
   return static_cast<int>(x);
 }
@@ -328,7 +331,8 @@ const std::vector<Option>& options_table() {
     t.push_back(int_option("subdivisions", {"cage"}, "generated cage: midpoint subdivisions of the 26-DOP, 0..4",
                            [](auto& s, const std::string&) -> auto& { return s.cage.subdivisions; }));
     t.push_back(int_option("harmonic_resolution", {"cage-harmonic"},
-                           "grid cells along the cage's longest side (4..1024; memory grows with its cube)",
+                           "grid cells along the cage's longest side (4..128; memory grows with its cube: 128 takes about 40 s and "
+                           "4 GB with a 186-vertex cage)",
                            [](auto& s, const std::string&) -> auto& { return s.cage.harmonic_resolution; }));
     // rbf (9.6)
     t.push_back(int_option("max_centres", {"rbf"},
@@ -601,7 +605,8 @@ Arrays: V (#V, 3) float64 positions in mesh units, F (#F, 3) int32 triangles, la
 selection codes (0 fixed, 1 free, 2+k handle k), transforms one affine 4x4 per handle (a 4x4 array
 for one handle, a list of them, or an (H, 4, 4) array). Inputs are copied once into the library's
 layout (V into column-major float64, F into row-major int32); results are returned without a copy:
-the (#V, 3) float64 array owns the library's buffer (Fortran order) and is writable.
+the (#V, 3) float64 array wraps the library's buffer, which it keeps alive (its base object; Fortran
+order), and is writable.
 
 prepare() and the frames release the GIL. A Deformer is not thread-safe: a second thread calling it
 while it works gets a RuntimeError. Warnings of prepare() and of each frame (folds, no convergence,
@@ -730,7 +735,8 @@ constrained vertex; msdeform.SolverError (RuntimeError) when a factorisation fai
           },
           py::arg("transforms"),
           R"doc(One frame: transforms[k] (an affine 4x4, mesh units) moves handle k. Returns the deformed
-positions, a new (#V, 3) float64 array that owns its data (no copy; Fortran order). Releases the GIL;
+positions, a new (#V, 3) float64 array over a buffer of its own (no copy; kept alive by its base
+object; Fortran order). Releases the GIL;
 issues the frame's warnings as msdeform.MsdeformWarning (also in frame_report.warnings).
 
 Raises ValueError for a wrong shape or number of transforms, msdeform.InvalidInput (ValueError) for a

@@ -175,8 +175,21 @@ def test_unknown_method_and_options_are_refused_by_name():
         msdeform.Deformer("lattice", cells=(4, 1000, 4))
     with pytest.raises(msdeform.InvalidInput, match=r"max_centres must be in 1\.\.20000"):
         msdeform.Deformer("rbf", max_centres=10**6)
+    with pytest.raises(msdeform.InvalidInput, match=r"harmonic_resolution must be in 4\.\.128"):
+        msdeform.Deformer("cage-harmonic", harmonic_resolution=256)
+    with pytest.raises(ValueError, match=r"option iterations = 9223372036854775808 is out of range"):
+        msdeform.Deformer("arap", iterations=2**63)
     with pytest.raises(ValueError, match="control applies to base='subdivision'"):
         msdeform.Deformer("multiscale-normal", control=msdeform.scene("lift", 100).control)
+
+
+def test_coordinates_that_overflow_lengths_are_named(lift):
+    with pytest.raises(msdeform.InvalidInput, match="coordinates too large"):
+        msdeform.Deformer("shell").prepare(lift.V * 1e300, lift.F, lift.labels)
+    with pytest.raises(msdeform.InvalidInput, match="coordinates too large: the bounding-box diagonal is 1.4"):
+        msdeform.Deformer("propagate").prepare(lift.V * 1e150, lift.F, lift.labels)
+    with pytest.raises(msdeform.InvalidInput, match="coordinates too small"):
+        msdeform.Deformer("arap").prepare(lift.V * 1e-150, lift.F, lift.labels)
 
 
 def test_a_deformer_made_without_init_is_refused():

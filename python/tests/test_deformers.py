@@ -327,3 +327,41 @@ def test_prepare_releases_the_gil():
     # Held, the GIL would stop this loop for the whole prepare(); released, only for the thread's
     # Python-level moments (the interpreter's switch interval, 5 ms).
     assert gaps.max() < 0.5 * duration, f"the main thread stalled {gaps.max():.3f} s of a {duration:.3f} s prepare"
+
+
+@pytest.mark.parametrize("name,options", [("propagate", {}), ("propagate", {"field": "geodesic"}),
+                                          ("shell", {}), ("gradient", {}), ("arap", {})])
+def test_needles_and_zero_area_faces_move_with_their_neighbours(lift, name, options):
+    """Issue 14, kind 4: a needle, a zero-area triangle and a vertex glued on by a zero-area triangle
+    (a twin of its neighbour) deform like the surface around them: no refusal, no jump."""
+    V, F, labels, T = lift
+    free = np.where(labels == 1)[0]
+    v = free[len(free) // 2]
+    face = F[np.any(F == v, axis=1)][0]
+    a, b = [w for w in face if w != v]
+    needle = V.copy()
+    needle[v] = 0.5 * (V[a] + V[b]) + 1e-12
+    zero = V.copy()
+    zero[v] = 0.5 * (V[a] + V[b])
+    for X in (needle, zero):
+        d = msdeform.Deformer(name, **options)
+        d.prepare(X, F, labels)
+        out = d.deform(T)
+        assert np.isfinite(out).all()
+        motion = np.linalg.norm(out[a] - X[a])
+        assert abs(np.linalg.norm(out[v] - X[v]) - motion) <= 0.05 * motion
+    # A twin w of vertex v (same position), reachable through a zero-area triangle (v, b, w).
+    row = int(np.where(np.any(F == v, axis=1))[0][0])
+    f0 = [int(x) for x in F[row]]
+    k = f0.index(v)
+    b, c = f0[(k + 1) % 3], f0[(k + 2) % 3]
+    w = len(V)
+    V2 = np.vstack([V, V[v]])
+    F2 = np.vstack([F, [[w, b, c]]]).astype(np.int32)
+    F2[row] = [v, b, w]
+    labels2 = np.append(labels, 1).astype(np.int32)
+    d = msdeform.Deformer(name, **options)
+    d.prepare(V2, F2, labels2)
+    out = d.deform(T)
+    assert np.isfinite(out).all()
+    assert np.linalg.norm(out[w] - out[v]) <= 0.02 * np.linalg.norm(out[v] - V2[v])

@@ -115,7 +115,7 @@ struct HeatGeodesics::Impl {
     } catch (const SolverError& e) {
       // M > 0 and −W >= 0, so this is a numerical breakdown (e.g. coordinates of wildly different scales).
       throw SolverError("HeatGeodesics: factoring the heat operator M - tW failed near vertex " +
-                            std::to_string(e.index()) + "; try a larger time_factor",
+                            std::to_string(e.index()) + "; try a larger time factor (--geodesic-time-factor, Python geodesic_time_factor)",
                         e.index());
     }
     heat_doublings = doublings;

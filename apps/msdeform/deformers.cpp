@@ -110,6 +110,10 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
                                                   {"harmonic", PropagationField::Harmonic}},
           CLI::ignore_case))
       ->default_str("harmonic");
+  prop->add_option("--geodesic-time-factor", settings.propagation.geodesic.time_factor,
+                   "field geodesic: heat-method time step t = m h^2 (h the mean edge length)")
+      ->check(CLI::Range(1e-6, 1e6))
+      ->capture_default_str();
   prop->add_option("--blend", settings.propagation.blend,
                    "matrix (s T(p) + (1-s) p) or decomposed (slerp rotation, scale/shear, translation)")
       ->transform(CLI::CheckedTransformer(

@@ -49,6 +49,10 @@ name=$(printf 'b%.0s' $(seq 246)).off
 "$msdeform" deform --scene lift --resolution 2k --method shell -o "$name" >/dev/null || fail "a 250-byte output name"
 [ -s "$name" ] || fail "the 250-byte output was not written"
 
+# The geodesic time factor the error messages suggest can be set.
+"$msdeform" deform --scene lift --resolution 2k --method propagate --field geodesic --geodesic-time-factor 4 \
+  -o geodesic.off >/dev/null || fail "--geodesic-time-factor"
+
 # Option ranges read as ranges.
 expect_error 105 "not in range 1 to 1000000" "$msdeform" deform --scene lift --method arap --iterations 0 -o x.off
 

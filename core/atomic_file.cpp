@@ -85,6 +85,10 @@ FileText::FileText(const std::string& path, const char* who) {
     ::close(fd);
     fail("is a folder, not a file");
   }
+  if (S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode)) {  // /dev/zero, /dev/urandom: endless
+    ::close(fd);
+    fail("is a device, not a file");
+  }
   if (S_ISREG(st.st_mode) && st.st_size > 0) {
     map_size_ = static_cast<size_t>(st.st_size);
     map_ = ::mmap(nullptr, map_size_, PROT_READ, MAP_PRIVATE, fd, 0);
@@ -96,9 +100,14 @@ FileText::FileText(const std::string& path, const char* who) {
     }
     ::madvise(map_, map_size_, MADV_SEQUENTIAL);
     text_ = std::string_view(static_cast<const char*>(map_), map_size_);
-  } else {  // empty, or a pipe or device: read what comes
+  } else {  // empty, or a pipe (e.g. <(command)): read what comes, up to a bound
+    constexpr size_t kMaxPipeBytes = size_t(1) << 30;
     char buffer[1 << 16];
     while (true) {
+      if (copy_.size() > kMaxPipeBytes) {
+        ::close(fd);
+        fail("more than 1 GiB from a pipe; give a file");
+      }
       const ssize_t n = ::read(fd, buffer, sizeof buffer);
       if (n == 0) break;
       if (n < 0) {

@@ -18,9 +18,9 @@ void write_file_atomically(const std::string& path, std::string_view content);
 void check_writable(const std::string& path, const char* who);
 
 //! A file's bytes, mapped read-only: pages are read from disk as a reader touches them, so a reader that
-//! stops at a bad first line of a 1 GB file costs that line, not the file. Non-regular files (pipes,
-//! devices) are read whole instead. \throw InvalidInput naming the path if it does not exist, is a
-//! folder, or cannot be opened or read.
+//! stops at a bad first line of a 1 GB file costs that line, not the file. Pipes (e.g. `<(command)`) are
+//! read whole, up to 1 GiB. \throw InvalidInput naming the path if it does not exist, is a folder or a
+//! device, cannot be opened or read, or a pipe gives more than 1 GiB.
 class FileText {
  public:
   FileText(const std::string& path, const char* who);

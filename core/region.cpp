@@ -117,10 +117,10 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
   size_t i = 0;
   while (i < text.size()) {
     const char c = text[i];
-    if (c == '\n') {
+    if (c == '\n' || (c == '\r' && text.substr(i + 1, 1) != "\n")) {  // LF, or a CR alone (CR LF counts once)
       ++line, ++i;
     } else if (c == '#') {
-      while (i < text.size() && text[i] != '\n') ++i;
+      while (i < text.size() && text[i] != '\n' && text[i] != '\r') ++i;
     } else if (std::isspace(static_cast<unsigned char>(c))) {
       ++i;
     } else {

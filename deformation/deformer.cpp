@@ -10,6 +10,15 @@
 
 namespace msd {
 
+namespace {
+constexpr double kMinExtent = 1e-70, kMaxExtent = 1e70;
+std::string format_number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", x);
+  return text;
+}
+}  // namespace
+
 void check_affine(const std::vector<Mat4>& transforms, const std::string& who) {
   for (size_t k = 0; k < transforms.size(); ++k) {
     if (!transforms[k].allFinite())
@@ -17,6 +26,10 @@ void check_affine(const std::vector<Mat4>& transforms, const std::string& who) {
     if ((transforms[k].row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-12)
       throw InvalidInput(who + ": transform of handle " + std::to_string(k) +
                          " is not affine (last row must be 0 0 0 1)");
+    if (!(transforms[k].cwiseAbs().maxCoeff() < kMaxExtent))  // its results would overflow the areas
+      throw InvalidInput(who + ": transform of handle " + std::to_string(k) + " has an entry of " +
+                         format_number(transforms[k].cwiseAbs().maxCoeff()) +
+                         "; msdeform works with sizes up to 1e70");
   }
 }
 
@@ -29,15 +42,6 @@ void affine_targets(const Positions& rest, const std::vector<int>& constrained, 
   }
 }
 
-namespace {
-constexpr double kMinExtent = 1e-70, kMaxExtent = 1e70;
-std::string format_number(double x) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3g", x);
-  return text;
-}
-}  // namespace
-
 void Deformer::prepare(const Positions& P, const Faces& F, const Region& region) {
   prepared_ = false;
   frame_report_ = {};
@@ -49,7 +53,10 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
   // keep areas squared inside a double.
   const double diagonal = P.rows() > 0 ? bounding_box_diagonal(P) : 0;
   const double extent = std::max(diagonal, P.rows() > 0 ? P.cwiseAbs().maxCoeff() : 0.0);
-  if (!(extent < kMaxExtent) || (diagonal > 0 && diagonal < kMinExtent))
+  if (P.rows() > 0 && diagonal == 0)
+    throw InvalidInput(name() + ": the input has no extent (all its " + std::to_string(P.rows()) +
+                       " vertices are at one point)");
+  if (!(extent < kMaxExtent) || (P.rows() > 0 && diagonal < kMinExtent))
     throw InvalidInput(name() + ": coordinates too " + (extent < kMaxExtent ? "small" : "large") +
                        ": the bounding-box diagonal is " + format_number(diagonal) + " and the largest |coordinate| " +
                        format_number(extent) + "; msdeform works with sizes from 1e-70 to 1e70 (squared areas must fit "

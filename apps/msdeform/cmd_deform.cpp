@@ -41,23 +41,23 @@ void add_deform_command(CLI::App& app) {
   edit->add_to(*cmd);
   method->add_to(*cmd);
   cmd->add_option("-o,--output", *output, "Deformed mesh to write (.off .obj .ply .stl); written atomically")->required();
-  auto weld = std::make_shared<double>(-1);
-  cmd->add_option("--weld", *weld,
+  auto weld = std::make_shared<double>(0);
+  CLI::Option* weld_option = cmd->add_option("--weld", *weld,
                   "Weld vertices within EPS (mesh units; 0: identical coordinates) before deforming, so a mesh split "
-                  "along seams deforms as one surface; the output keeps the file's vertices and faces")
-      ->check(CLI::NonNegativeNumber);
+                  "along seams deforms as one surface; the output keeps the file's vertices and faces");
   auto controls_output = std::make_shared<std::string>();
   cmd->add_option("--controls-output", *controls_output,
                   "lattice, cage-mvc, cage-harmonic: also write the deformed control points (the lattice's as a point "
                   "cloud, the cage with its faces; .off .obj .ply)");
   cmd->callback([=] {
+    const bool welding = weld_option->count() > 0;  // weld_case refuses a negative or non-finite EPS
     // Outputs are checked before any work: a known format, and never one of the inputs or each other.
     edit->check_output(*output, "-o", {method->cage_file});
     if (!controls_output->empty()) {
       edit->check_output(*controls_output, "--controls-output", {method->cage_file});
       if (same_file(*controls_output, *output)) throw InvalidInput("--controls-output and -o name the same file");
     }
-    const EditCase c = *weld >= 0 ? weld_case(edit->load(), *weld) : edit->load();
+    const EditCase c = welding ? weld_case(edit->load(), *weld) : edit->load();
     if (c.weld)
       std::printf("welded %d vertices into others (within %g); %d faces lost a corner and were dropped\n",
                   c.weld->merged, *weld, c.weld->faces_dropped);

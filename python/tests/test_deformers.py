@@ -190,6 +190,15 @@ def test_coordinates_that_overflow_lengths_are_named(lift):
         msdeform.Deformer("propagate").prepare(lift.V * 1e150, lift.F, lift.labels)
     with pytest.raises(msdeform.InvalidInput, match="coordinates too small"):
         msdeform.Deformer("arap").prepare(lift.V * 1e-150, lift.F, lift.labels)
+    for name in ("arap", "rbf"):  # all at one point: refused, not an inf warning or a silent result
+        with pytest.raises(msdeform.InvalidInput, match="no extent"):
+            msdeform.Deformer(name).prepare(np.ones_like(lift.V), lift.F, lift.labels)
+    d = msdeform.Deformer("shell")
+    d.prepare(lift.V, lift.F, lift.labels)
+    huge = np.eye(4)
+    huge[0, 3] = 1e300
+    with pytest.raises(msdeform.InvalidInput, match="has an entry of 1e\\+300"):
+        d.deform([huge])
 
 
 def test_a_deformer_made_without_init_is_refused():

@@ -95,6 +95,8 @@ grep -q "split along seams" err.txt || fail "no seam warning"
 "$msdeform" deform split.off --sel split.sel --def lift.def --method shell --weld 0 -o welded.off >out.txt 2>err.txt ||
   { cat err.txt; fail "deform --weld 0"; }
 grep -q "welded" out.txt || fail "--weld printed nothing"
+expect_error 1 "the distance must be finite and >= 0, got nan" "$msdeform" deform split.off --sel split.sel \
+  --def lift.def --method shell --weld nan -o nan.off
 grep -q "split along seams" err.txt && fail "a seam warning after welding"
 [ "$(sed -n 2p welded.off | cut -d' ' -f1)" = "$(sed -n 2p split.off | cut -d' ' -f1)" ] ||
   fail "--weld changed the vertex count of the output"

@@ -81,6 +81,11 @@ TEST_CASE("bad selection and transform files give specific errors", "[core][regi
   CHECK_THROWS_WITH(Region::from_codes({0, 1, 2147483647}), Contains("vertex 2 has selection code 2147483647"));
   // A folder given as a selection is named as one (it read as "0 labels").
   CHECK_THROWS_WITH(read_sel(tmp.path.string(), 3), Contains("is a folder"));
+  // CR-only line ends with comments (the scene command's own .sel starts with '#' lines).
+  CHECK(read_sel(write("cr.sel", "# three\r# labels\r0\r1\r2\r"), 3).codes() == std::vector<int>{0, 1, 2});
+  CHECK_THROWS_WITH(read_sel(write("crbad.sel", "# c\r0\rx\r2\r"), 3), Contains("line 3"));
+  // Devices are not files (/dev/zero read forever).
+  CHECK_THROWS_WITH(read_sel("/dev/zero", 3), Contains("is a device"));
   // A byte-order mark is not part of the first label.
   CHECK(read_sel(write("bom.sel", "\xEF\xBB\xBF" "0\n1\n2\n"), 3).codes() == std::vector<int>{0, 1, 2});
   CHECK_THROWS_WITH(read_sel(write("word.sel", "0\nx\n2\n"), 3), Contains("line 2") && Contains("found 'x'"));

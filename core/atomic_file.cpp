@@ -73,30 +73,25 @@ void write_file_atomically(const std::string& path, std::string_view content) {
 
 FileText::FileText(const std::string& path, const char* who) {
   const auto fail = [&](const std::string& what) { throw InvalidInput(std::string(who) + ": " + path + ": " + what); };
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // Closed on every way out (a mapping outlives its descriptor).
+  struct Descriptor {
+    int fd;
+    ~Descriptor() {
+      if (fd >= 0) ::close(fd);
+    }
+  } const file{::open(path.c_str(), O_RDONLY | O_CLOEXEC)};
+  const int fd = file.fd;
   if (fd < 0) fail(std::string("cannot open it: ") + std::strerror(errno));
   struct stat st {};
-  if (::fstat(fd, &st) != 0) {
-    const int err = errno;
-    ::close(fd);
-    fail(std::string("cannot read it: ") + std::strerror(err));
-  }
-  if (S_ISDIR(st.st_mode)) {
-    ::close(fd);
-    fail("is a folder, not a file");
-  }
-  if (S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode)) {  // /dev/zero, /dev/urandom: endless
-    ::close(fd);
-    fail("is a device, not a file");
-  }
+  if (::fstat(fd, &st) != 0) fail(std::string("cannot read it: ") + std::strerror(errno));
+  if (S_ISDIR(st.st_mode)) fail("is a folder, not a file");
+  if (S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode)) fail("is a device, not a file");  // /dev/zero: endless
   if (S_ISREG(st.st_mode) && st.st_size > 0) {
     map_size_ = static_cast<size_t>(st.st_size);
     map_ = ::mmap(nullptr, map_size_, PROT_READ, MAP_PRIVATE, fd, 0);
-    const int err = errno;
-    ::close(fd);
     if (map_ == MAP_FAILED) {
       map_ = nullptr;
-      fail(std::string("cannot map it: ") + std::strerror(err));
+      fail(std::string("cannot map it: ") + std::strerror(errno));
     }
     ::madvise(map_, map_size_, MADV_SEQUENTIAL);
     text_ = std::string_view(static_cast<const char*>(map_), map_size_);
@@ -104,21 +99,15 @@ FileText::FileText(const std::string& path, const char* who) {
     constexpr size_t kMaxPipeBytes = size_t(1) << 30;
     char buffer[1 << 16];
     while (true) {
-      if (copy_.size() > kMaxPipeBytes) {
-        ::close(fd);
-        fail("more than 1 GiB from a pipe; give a file");
-      }
+      if (copy_.size() > kMaxPipeBytes) fail("more than 1 GiB from a pipe; give a file");
       const ssize_t n = ::read(fd, buffer, sizeof buffer);
       if (n == 0) break;
       if (n < 0) {
         if (errno == EINTR) continue;
-        const int err = errno;
-        ::close(fd);
-        fail(std::string("error while reading it: ") + std::strerror(err));
+        fail(std::string("error while reading it: ") + std::strerror(errno));
       }
       copy_.append(buffer, static_cast<size_t>(n));
     }
-    ::close(fd);
     text_ = copy_;
   }
   if (text_.substr(0, 3) == "\xEF\xBB\xBF") text_.remove_prefix(3);  // a UTF-8 byte-order mark

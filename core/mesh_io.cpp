@@ -27,6 +27,16 @@ struct FileContents {
   std::vector<int> corners, offsets{0}, lines;
 };
 
+// The line of text that starts at pos, without its break (LF, CR LF or CR); pos moves past the break.
+// Returns false, leaving pos, when no break follows (the line runs to the end of the text).
+bool take_line(std::string_view text, size_t& pos, std::string_view& line) {
+  const size_t end = text.find_first_of("\r\n", pos);
+  line = text.substr(pos, end == std::string_view::npos ? std::string_view::npos : end - pos);
+  if (end == std::string_view::npos) return false;
+  pos = end + (text.substr(end, 2) == "\r\n" ? 2 : 1);
+  return true;
+}
+
 // Splits text into lines with '#' comments stripped, numbering them from 1. Lines end in LF, CR LF or CR.
 class LineReader {
  public:
@@ -36,10 +46,7 @@ class LineReader {
   // Next line that has content; false at the end of the text.
   bool next(std::string_view& line) {
     while (pos_ < text_.size()) {
-      size_t end = text_.find_first_of("\r\n", pos_);
-      if (end == std::string_view::npos) end = text_.size();
-      line = text_.substr(pos_, end - pos_);
-      pos_ = end + (text_.substr(end, 2) == "\r\n" ? 2 : 1);
+      if (!take_line(text_, pos_, line)) pos_ = text_.size();  // the last line, without a break
       ++number_;
       if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
       while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.remove_suffix(1);
@@ -251,10 +258,8 @@ class PlyReader {
     if (text_.substr(0, 3) != "ply")
       throw InvalidInput(who_ + ": " + path_ + " is not a PLY file (it does not start with 'ply')");
     while (true) {
-      const size_t end = text_.find_first_of("\r\n", pos_);
-      if (end == std::string_view::npos) fail("header has no 'end_header'");
-      std::string_view line = text_.substr(pos_, end - pos_);
-      pos_ = end + (text_.substr(end, 2) == "\r\n" ? 2 : 1);
+      std::string_view line;
+      if (!take_line(text_, pos_, line)) fail("header has no 'end_header'");
       ++line_;
       const std::string_view key = next_token(line);
       // Every header line is parsed whole: a word too many is an error, not ignored.

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "msdeform/core/local_frame.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/region.h"
 
@@ -138,29 +139,6 @@ class Deformer {
  private:
   bool prepared_ = false;
   int num_handles_ = 0, num_vertices_ = 0, num_constrained_ = 0;
-};
-
-//! A centred, normalised frame x̂ = (x − centre) / scale (centre and diagonal of the bounding box), for
-//! methods whose tolerances or damping are absolute: working in it makes them translation- and
-//! scale-equivariant (issue 14: a shape 1e6 from the origin, or modelled in 1e-30 units, is the same edit).
-struct LocalFrame {
-  Vec3 centre = Vec3::Zero();
-  double scale = 1;
-  //! The frame of P (#V by 3): its bounding box's centre and diagonal (1 when all points coincide).
-  static LocalFrame of(const Positions& P);
-  Positions to_local(const Positions& X) const { return (X.rowwise() - centre.transpose()) / scale; }
-  //! In place, allocation-free.
-  void to_world(Positions& X) const {
-    X *= scale;
-    X.rowwise() += centre.transpose();
-  }
-  //! T̂ = N T N⁻¹ with N(x) = (x − centre) / scale: the same motion in the local frame.
-  Mat4 to_local(const Mat4& T) const;
-  //! Every transform, into out (resized; no allocation once it has the size).
-  void to_local(const std::vector<Mat4>& T, std::vector<Mat4>& out) const {
-    out.resize(T.size());
-    for (size_t k = 0; k < T.size(); ++k) out[k] = to_local(T[k]);
-  }
 };
 
 //! A deformer whose solver works in the shape's centred, normalised frame (LocalFrame), for methods whose

@@ -9,6 +9,7 @@
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/local_frame.h"
 #include "msdeform/core/parallel.h"
 
 namespace msd {
@@ -100,8 +101,7 @@ struct ClosestPointQuery::Impl {
   // Embree sees the mesh in single precision in a centred, normalised frame x̂ = (x − centre) / scale,
   // where floats keep their digits wherever the mesh sits (1e20 from the origin, all its vertices rounded
   // to one float, used to leave queries with no triangle at all).
-  Vec3 centre = Vec3::Zero();
-  double scale = 1;
+  LocalFrame frame;
   double max_abs_coordinate = 0;  // in the normalised frame
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
@@ -188,13 +188,9 @@ void ClosestPointQuery::build(const Positions& P, const Faces& F) {
   auto impl = std::make_unique<Impl>();
   impl->P = P;
   impl->F = F;
-  if (P.rows() > 0) {
-    const Vec3 lo = P.colwise().minCoeff().transpose(), hi = P.colwise().maxCoeff().transpose();
-    impl->centre = 0.5 * (lo + hi);
-    const double diagonal = (hi - lo).norm();
-    impl->scale = diagonal > 0 && std::isfinite(diagonal) ? diagonal : 1;
-    impl->max_abs_coordinate = ((P.rowwise() - impl->centre.transpose()) / impl->scale).cwiseAbs().maxCoeff();
-  }
+  impl->frame = LocalFrame::of(P);
+  const Positions local = impl->frame.to_local(P);
+  impl->max_abs_coordinate = local.rows() > 0 ? local.cwiseAbs().maxCoeff() : 0.0;
   impl->device = rtcNewDevice(nullptr);
   if (!impl->device)
     throw Error("ClosestPointQuery::build: Embree device creation failed: " + embree_error(nullptr));
@@ -216,7 +212,7 @@ void ClosestPointQuery::build(const Positions& P, const Faces& F) {
     throw Error("ClosestPointQuery::build: Embree buffer allocation failed: " + why);
   }
   for (Eigen::Index v = 0; v < P.rows(); ++v)
-    for (int k = 0; k < 3; ++k) vertices[3 * v + k] = static_cast<float>((P(v, k) - impl->centre[k]) / impl->scale);
+    for (int k = 0; k < 3; ++k) vertices[3 * v + k] = static_cast<float>(local(v, k));
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) indices[3 * f + k] = static_cast<unsigned>(F(f, k));
   rtcCommitGeometry(geometry);
@@ -230,8 +226,8 @@ void ClosestPointQuery::build(const Positions& P, const Faces& F) {
 
 ClosestPoint ClosestPointQuery::query(const Vec3& p) const {
   if (!impl_) throw UsageError("ClosestPointQuery::query: called before build()");
-  QueryState state{&impl_->P, &impl_->F, p, impl_->scale, 0.0f, ClosestPoint{}};
-  const Vec3 local = (p - impl_->centre) / impl_->scale;
+  QueryState state{&impl_->P, &impl_->F, p, impl_->frame.scale, 0.0f, ClosestPoint{}};
+  const Vec3 local = impl_->frame.to_local(p);
   const double magnitude = std::max(impl_->max_abs_coordinate, local.cwiseAbs().maxCoeff());
   state.slack = static_cast<float>(8.0 * FLT_EPSILON * magnitude) + FLT_MIN;
   RTCPointQuery query;

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <sstream>
 #include <string_view>
 #include <unordered_map>
 #include <vector>
@@ -207,32 +208,45 @@ class PlyReader {
     for (const Element& e : elements_) {
       if (e.props.empty()) continue;
       for (long i = 0; i < e.count; ++i) {
+        if (!binary_) skip_space();
+        const int item_line = line_;
         Vec3 p = Vec3::Zero();
-        for (size_t k = 0; k < e.props.size(); ++k) {
-          const Property& prop = e.props[k];
+        for (const Property& prop : e.props) {
           if (prop.list_count_type.empty()) {
             const double x = value(prop.type);
             if (e.name == "vertex" && prop.coordinate >= 0) p[prop.coordinate] = x;
             continue;
           }
-          const long n = static_cast<long>(value(prop.list_count_type));
-          if (n < 0 || n > (1 << 20)) fail("list of " + std::to_string(n) + " items");
+          const double n = value(prop.list_count_type);  // an integer type (check_header)
           const bool indices = e.name == "face" && (prop.name == "vertex_indices" || prop.name == "vertex_index");
-          if (indices && n < 3) fail("face " + std::to_string(i) + " has " + std::to_string(n) + " corners");
-          for (long j = 0; j < n; ++j) {
+          if (n < (indices ? 3 : 0) || n > (1 << 20))
+            fail(e.name + " " + std::to_string(i) + " has a list of " + std::to_string(static_cast<long long>(n)) +
+                 " items" + (indices ? " (a face needs 3 to 2^20 corners)" : " (at most 2^20)"));
+          for (int j = 0; j < static_cast<int>(n); ++j) {
             const double idx = value(prop.type);
-            if (indices) soup.corners.push_back(idx >= 0 && idx < 2147483647.0 ? static_cast<int>(idx) : -1);
+            if (!indices) continue;
+            if (idx != std::floor(idx) || idx < -1e15 || idx > 1e15)
+              fail("face " + std::to_string(i) + " has vertex index " + number(idx) + ", not an integer");
+            // Out-of-range indices are reported with the face by triangulate (as for OFF and OBJ).
+            soup.corners.push_back(static_cast<int>(std::clamp(idx, -2147483648.0, 2147483647.0)));
           }
           if (indices) {
             soup.offsets.push_back(static_cast<int>(soup.corners.size()));
-            soup.lines.push_back(0);
+            soup.lines.push_back(binary_ ? 0 : item_line);
           }
         }
+        end_item(e, i);
         if (e.name == "vertex") {
           if (!p.allFinite()) fail("vertex " + std::to_string(i) + " has a non-finite coordinate (NaN or inf)");
           soup.points.push_back(p);
         }
       }
+    }
+    if (!binary_) {
+      skip_space();
+      if (pos_ < text_.size())
+        fail("data after the last element ('" +
+             printable(text_.substr(pos_, std::min<size_t>(20, text_.find_first_of("\r\n", pos_) - pos_))) + "')");
     }
     return soup;
   }
@@ -249,14 +263,20 @@ class PlyReader {
   };
 
   [[noreturn]] void fail(const std::string& what) const {
-    throw InvalidInput(who_ + ": " + path_ + (binary_ ? "" : " line " + std::to_string(line_)) + ": " + what);
+    const bool has_lines = !binary_ || in_header_;
+    throw InvalidInput(who_ + ": " + path_ + (has_lines ? " line " + std::to_string(line_) : "") + ": " + what);
   }
 
   std::string_view header_token(std::string_view& line) { return next_token(line); }
 
   void parse_header() {
-    if (text_.substr(0, 3) != "ply")
+    std::string_view first;
+    take_line(text_, pos_, first);
+    line_ = 1;
+    if (first.substr(0, 3) != "ply")
       throw InvalidInput(who_ + ": " + path_ + " is not a PLY file (it does not start with 'ply')");
+    if (first != "ply") fail("the first line must be 'ply' alone, found '" + printable(first.substr(0, 40)) + "'");
+    bool has_format = false;
     while (true) {
       std::string_view line;
       if (!take_line(text_, pos_, line)) fail("header has no 'end_header'");
@@ -268,10 +288,14 @@ class PlyReader {
           fail("unexpected '" + printable(extra.substr(0, 40)) + "' at the end of the '" + std::string(key) + "' line");
       };
       if (key == "format") {
+        if (has_format) fail("a second 'format' line");
+        has_format = true;
         const std::string_view f = next_token(line);
-        if (f == "ascii") binary_ = false;
-        else if (f == "binary_little_endian") binary_ = true;
-        else fail("unsupported PLY format '" + printable(f.substr(0, 40)) + "'");
+        binary_ = f != "ascii";
+        swap_bytes_ = f == "binary_big_endian";
+        if (f != "ascii" && f != "binary_little_endian" && f != "binary_big_endian")
+          fail("unknown PLY format '" + printable(f.substr(0, 40)) +
+               "' (ascii, binary_little_endian or binary_big_endian)");
         if (next_token(line) != "1.0") fail("unsupported PLY version (1.0 expected)");
         end_of_line();
       } else if (key == "element") {
@@ -291,17 +315,24 @@ class PlyReader {
           prop.list_count_type = std::string(next_token(line));
           type = next_token(line);
           check_type(prop.list_count_type);
+          if (prop.list_count_type.find("float") != std::string::npos || prop.list_count_type == "double")
+            fail("a list count of type '" + prop.list_count_type + "' (it must be an integer type)");
         }
         prop.type = std::string(type);
         check_type(prop.type);
         prop.name = std::string(next_token(line));
         if (prop.name.empty()) fail("property without a name");
         end_of_line();
+        for (const Property& other : elements_.back().props)
+          if (other.name == prop.name)
+            fail("element '" + printable(elements_.back().name) + "' has two properties named '" + printable(prop.name) + "'");
         if (elements_.back().name == "vertex" && prop.list_count_type.empty() && prop.name.size() == 1 &&
             prop.name[0] >= 'x' && prop.name[0] <= 'z')
           prop.coordinate = prop.name[0] - 'x';
         elements_.back().props.push_back(prop);
       } else if (key == "end_header") {
+        end_of_line();
+        if (!has_format) fail("the header has no 'format' line");
         // A vertex element must have x, y and z (other spellings, e.g. X Y Z, would read as zeros).
         for (const Element& e : elements_) {
           if (e.name != "vertex" || e.count == 0) continue;
@@ -312,9 +343,11 @@ class PlyReader {
             if (!has[k]) fail(std::string("the vertex element has no property '") + char('x' + k) +
                               "' (properties x, y and z, lower case, give the positions)");
         }
+        in_header_ = false;
+        ++line_;  // line_ is now the line at pos_, where the data starts
         check_sizes();
         break;
-      } else if (key != "comment" && key != "obj_info" && !key.empty() && !(key == "ply" && line_ == 1)) {
+      } else if (key != "comment" && key != "obj_info" && !key.empty()) {
         fail("unknown PLY header keyword '" + printable(key.substr(0, 40)) + "'");
       }
     }
@@ -358,7 +391,7 @@ class PlyReader {
   double value(const std::string& type) {
     if (!binary_) {
       // ASCII: next whitespace-separated token, counting lines.
-      while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) line_ += text_[pos_++] == '\n';
+      skip_space();
       size_t e = pos_;
       while (e < text_.size() && !std::isspace(static_cast<unsigned char>(text_[e]))) ++e;
       if (e == pos_) fail("file ends inside the data");
@@ -366,13 +399,16 @@ class PlyReader {
       const char* first = text_.data() + pos_;
       auto [ptr, ec] = std::from_chars(first, text_.data() + e, x);
       if (ec != std::errc() || ptr != text_.data() + e)
-        fail("expected a number, found '" + std::string(text_.substr(pos_, std::min<size_t>(e - pos_, 40))) + "'");
+        fail("expected a number, found '" + printable(text_.substr(pos_, std::min<size_t>(e - pos_, 40))) + "'");
       pos_ = e;
       return x;
     }
     auto take = [&](auto v) {
       if (pos_ + sizeof(v) > text_.size()) fail("file ends inside the binary data");
-      std::memcpy(&v, text_.data() + pos_, sizeof(v));
+      unsigned char bytes[sizeof(v)];
+      std::memcpy(bytes, text_.data() + pos_, sizeof(v));
+      if (swap_bytes_) std::reverse(bytes, bytes + sizeof(v));
+      std::memcpy(&v, bytes, sizeof(v));
       pos_ += sizeof(v);
       return static_cast<double>(v);
     };
@@ -386,11 +422,36 @@ class PlyReader {
     return take(double{});
   }
 
+  // ASCII: skips white space, counting line breaks (LF, CR LF and CR).
+  void skip_space() {
+    for (; pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_])); ++pos_)
+      line_ += text_[pos_] == '\n' || (text_[pos_] == '\r' && text_.substr(pos_ + 1, 1) != "\n");
+  }
+
+  // ASCII: an item is one line; a value left on it means the header and the data disagree.
+  void end_item(const Element& e, long i) {
+    if (binary_) return;
+    while (pos_ < text_.size() && (text_[pos_] == ' ' || text_[pos_] == '\t')) ++pos_;
+    if (pos_ < text_.size() && text_[pos_] != '\n' && text_[pos_] != '\r') {
+      const std::string_view rest = text_.substr(pos_, text_.find_first_of("\r\n", pos_) - pos_);
+      fail(e.name + " " + std::to_string(i) + " has more values than the header's " + std::to_string(e.props.size()) +
+           " properties ('" + printable(rest.substr(0, 20)) + "')");
+    }
+  }
+
+  static std::string number(double x) {
+    std::ostringstream out;
+    out << x;
+    return out.str();
+  }
+
   std::string_view text_;
   std::string path_, who_;
   size_t pos_ = 0;
   int line_ = 0;
   bool binary_ = false;
+  bool swap_bytes_ = false;  // binary_big_endian
+  bool in_header_ = true;
   std::vector<Element> elements_;
 };
 

@@ -29,15 +29,15 @@ struct TriangleSoup {
 //! an OFF with 0 faces, a PLY with only a vertex element or an OBJ with only `v` lines is a point cloud.
 //! Orientation and manifoldness are not looked at (see check_surface). An STL's vertices are its distinct
 //! corner positions in the order they first appear.
-//! 	hrow InvalidInput with file and line for: a missing or unreadable file, an unknown extension, a
+//! \throw InvalidInput with file and line for: a missing or unreadable file, an unknown extension, a
 //! malformed header or number, a non-finite coordinate, a face index out of range, no vertices at all.
 TriangleSoup load_soup(const std::string& path, LoadReport* report = nullptr);
 
 //! Loads a manifold triangle mesh: load_soup, then check_surface (core/surface_check.h). Faces wound
 //! against their neighbours are turned over (counted in the report); the file's vertices keep their
 //! order and count exactly.
-//! 	hrow InvalidInput as load_soup, and for a file without faces (a point cloud).
-//! 	hrow TopologyError naming the file and the edge, vertex or face ids for a non-manifold edge or
+//! \throw InvalidInput as load_soup, and for a file without faces (a point cloud).
+//! \throw TopologyError naming the file and the edge, vertex or face ids for a non-manifold edge or
 //! vertex or a non-orientable component (space methods take such input: load it with load_soup).
 Mesh load_mesh(const std::string& path, LoadReport* report = nullptr);
 

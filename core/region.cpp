@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 
 #include "msdeform/core/adjacency.h"
@@ -107,9 +108,12 @@ void Region::validate(int num_vertices, const Faces* F) const {
 
 namespace {
 
-// Whitespace-separated numbers of a text file with '#' comments, each with its line number.
+// Whitespace-separated numbers of a text file with '#' comments, each with its line number. More than
+// at_most numbers (what the file should hold: expected) is an error at the first one too many, so a huge
+// file costs no more than a right one.
 template <class T>
-std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char* who, const char* what) {
+std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char* who, const char* what,
+                                            size_t at_most = SIZE_MAX, const std::string& expected = "") {
   const FileText file(path, who);
   const std::string_view text = file.text();
   std::vector<std::pair<T, int>> out;
@@ -132,6 +136,9 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
       if (ec != std::errc() || ptr != text.data() + e)
         throw InvalidInput(std::string(who) + ": " + path + " line " + std::to_string(line) + ": expected " + what +
                            ", found '" + printable(text.substr(i, std::min<size_t>(e - i, 40))) + "'");
+      if (out.size() == at_most)
+        throw InvalidInput(std::string(who) + ": " + path + " line " + std::to_string(line) + ": more than " +
+                           std::to_string(at_most) + " values (expected " + expected + ")");
       out.emplace_back(value, line);
       i = e;
     }
@@ -142,7 +149,9 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
 }  // namespace
 
 Region read_sel(const std::string& path, int num_vertices) {
-  const auto values = read_numbers<long>(path, "read_sel", "an integer selection code (0 fixed, 1 free, 2+ handle)");
+  const auto values = read_numbers<long>(path, "read_sel", "an integer selection code (0 fixed, 1 free, 2+ handle)",
+                                         std::max(num_vertices, 0),
+                                         "one label per vertex of the " + std::to_string(num_vertices) + "-vertex mesh");
   if (static_cast<int>(values.size()) != num_vertices)
     throw InvalidInput("read_sel: " + path + " has " + std::to_string(values.size()) + " labels but the mesh has " +
                        std::to_string(num_vertices) + " vertices");
@@ -166,7 +175,9 @@ void write_sel(const Region& region, const std::string& path) {
 }
 
 Region read_dmat_groups(const std::string& path, int num_vertices) {
-  const auto values = read_numbers<long>(path, "read_dmat_groups", "an integer");
+  const auto values = read_numbers<long>(path, "read_dmat_groups", "an integer", std::max(num_vertices, 0) + size_t{2},
+                                         "the header '1 " + std::to_string(num_vertices) +
+                                             "' (one column, a row per vertex) and one group id per vertex");
   if (values.size() < 2) throw InvalidInput("read_dmat_groups: " + path + ": missing 'cols rows' header");
   const long cols = values[0].first, rows = values[1].first;
   if (cols != 1)

@@ -25,7 +25,7 @@ class SparseSPDSolver {
   void factor(const SparseMatrix& A);
   //! Numeric refactorisation of a matrix with the same size and sparsity pattern as the last factor()
   //! (iterative methods whose values change each step): the ordering and symbolic analysis are reused.
-  //! 	hrow UsageError without a previous factor() or for another size; SolverError as factor().
+  //! \throw UsageError without a previous factor() or for another size; SolverError as factor().
   void refactor(const SparseMatrix& A);
   bool factored() const;
   int size() const;

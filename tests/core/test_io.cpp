@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -367,6 +368,74 @@ TEST_CASE("readers refuse counts the file cannot hold and stop at the first bad 
   // A folder is named as one.
   std::filesystem::create_directory(tmp.file("folder.off"));
   CHECK_THROWS_WITH(load_soup(tmp.file("folder.off")), Contains("is a folder"));
+}
+
+// Issue 14, kind 9: what the PLY fuzzer found (a list count of 1.8e25 read as a float overflowed the
+// conversion to an integer), the big-endian PLY it showed was refused, and the header and data
+// leniencies it reached.
+TEST_CASE("PLY: big-endian data reads, and headers and items that disagree are refused by line", "[core][io][bad-input]") {
+  test::TempDir tmp;
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(tmp.file(name), std::ios::binary) << text;
+    return tmp.file(name);
+  };
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                           "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string vertices = "0 0 0\n1 0 0\n0 1 0\n";
+  REQUIRE(load_soup(write("ok.ply", head + vertices + "3 0 1 2\n")).F.rows() == 1);
+
+  // Big-endian binary: doubles and an int index list, byte-swapped.
+  std::string big = "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+                    "property double z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  auto put_big = [&](auto v) {
+    char bytes[sizeof(v)];
+    std::memcpy(bytes, &v, sizeof(v));
+    std::reverse(bytes, bytes + sizeof(v));
+    big.append(bytes, sizeof(v));
+  };
+  const double xyz[3][3] = {{0.1, 0.2, 0.3}, {1.0 / 3.0, 0, 0}, {0, 1, -1e-17}};
+  for (const auto& p : xyz)
+    for (double x : p) put_big(x);
+  big.push_back(3);
+  for (int i : {0, 2, 1}) put_big(i);
+  const TriangleSoup soup = load_soup(write("big.ply", big));
+  REQUIRE(soup.P.rows() == 3);
+  CHECK(soup.P(1, 0) == 1.0 / 3.0);
+  CHECK(soup.P(2, 2) == -1e-17);
+  CHECK(soup.F.row(0) == Eigen::RowVector3i(0, 2, 1));
+
+  // The header: a list count must be an integer type (the fuzzer's input), one format, names once.
+  std::string float_count = head;
+  float_count.replace(float_count.find("uchar int"), 5, "float");
+  CHECK_THROWS_WITH(load_soup(write("fc.ply", float_count + vertices + "3 0 1 2\n")),
+                    Contains("line 8") && Contains("list count of type 'float'"));
+  CHECK_THROWS_WITH(load_soup(write("first.ply", "ply junk\n" + head.substr(4) + vertices + "3 0 1 2\n")),
+                    Contains("line 1") && Contains("'ply' alone"));
+  CHECK_THROWS_WITH(load_soup(write("noformat.ply", "ply\n" + head.substr(head.find("element")) + vertices + "3 0 1 2\n")),
+                    Contains("no 'format' line"));
+  CHECK_THROWS_WITH(load_soup(write("twoformats.ply", "ply\nformat ascii 1.0\n" + head.substr(4) + vertices + "3 0 1 2\n")),
+                    Contains("line 3") && Contains("second 'format'"));
+  std::string twice = head;
+  twice.insert(twice.find("property float z"), "property float y\n");
+  CHECK_THROWS_WITH(load_soup(write("twice.ply", twice + vertices + "3 0 1 2\n")),
+                    Contains("line 6") && Contains("two properties named 'y'"));
+  std::string end_junk = head;
+  end_junk.insert(end_junk.size() - 1, " junk");
+  CHECK_THROWS_WITH(load_soup(write("endjunk.ply", end_junk + vertices + "3 0 1 2\n")),
+                    Contains("line 9") && Contains("unexpected 'junk'"));
+  // The data: one item per line, integer indices, nothing after the last element.
+  CHECK_THROWS_WITH(load_soup(write("extra.ply", head + vertices + "3 0 1 2 7\n")),
+                    Contains("line 13") && Contains("face 0 has more values than the header's 1 properties ('7"));
+  CHECK_THROWS_WITH(load_soup(write("extrav.ply", head + "0 0 0 5\n1 0 0\n0 1 0\n3 0 1 2\n")),
+                    Contains("vertex 0 has more values"));
+  CHECK_THROWS_WITH(load_soup(write("after.ply", head + vertices + "3 0 1 2\n3 0 2 1\n")),
+                    Contains("data after the last element ('3 0 2 1"));
+  CHECK_THROWS_WITH(load_soup(write("half.ply", head + vertices + "3 0 1.5 2\n")),
+                    Contains("vertex index 1.5, not an integer"));
+  CHECK_THROWS_WITH(load_soup(write("neg.ply", head + vertices + "3 0 -5 2\n")),
+                    Contains("line 13") && Contains("index -5 out of range"));
+  CHECK_THROWS_WITH(load_soup(write("two.ply", head + vertices + "2 0 1\n")),
+                    Contains("face 0 has a list of 2 items"));
 }
 
 // Issue 14, kind 7: files that other tools write and read read right, and messages point at the fault.

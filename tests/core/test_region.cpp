@@ -94,6 +94,13 @@ TEST_CASE("bad selection and transform files give specific errors", "[core][regi
   CHECK_THROWS_WITH(read_def(write("proj.def", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n")), Contains("not affine"));
   CHECK_THROWS_WITH(read_def(write("nan.def", "1 0 0 0\n0 nan 0 0\n0 0 1 0\n0 0 0 1\n")), Contains("line 2"));
   CHECK_THROWS_WITH(read_dmat_groups(write("two.dmat", "2 3\n0 0 0 1 1 1\n"), 3), Contains("one column"));
+  // A selection with far more labels than vertices stops at the first one too many (it read them all).
+  std::string many = "0\n1\n2\n";
+  for (int i = 0; i < 1000000; ++i) many += "1\n";
+  CHECK_THROWS_WITH(read_sel(write("many.sel", many), 3),
+                    Contains("line 4") && Contains("more than 3 values (expected one label per vertex"));
+  CHECK_THROWS_WITH(read_dmat_groups(write("many.dmat", "1 3\n" + many), 3),
+                    Contains("line 5") && Contains("more than 5 values"));
 }
 
 TEST_CASE("region validation names an unconstrained free component", "[core][region][bad-input]") {

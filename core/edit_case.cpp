@@ -28,7 +28,7 @@ EditCase load_edit_case(const std::string& mesh, const std::string& sel, const s
   EditCase c;
   c.name = std::filesystem::path(mesh).stem().string();
   c.path = mesh;
-  TriangleSoup soup = load_soup(mesh);
+  TriangleSoup soup = load_soup(mesh, &c.load_report);
   c.P = std::move(soup.P);
   c.F = std::move(soup.F);
   c.surface_problem = check_surface(c.P, c.F).problem();  // orients the faces where it can

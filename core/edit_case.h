@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "msdeform/core/mesh_io.h"
 #include "msdeform/core/region.h"
 #include "msdeform/core/subdivision.h"
 #include "msdeform/core/types.h"
@@ -24,6 +25,7 @@ struct EditCase {
   //! Built-in scenes: the Loop control mesh the surface refines (for a subdivision base); null for files.
   std::shared_ptr<const ControlMesh> control;
   std::string path;  //!< the mesh file, empty for built-in scenes
+  LoadReport load_report;  //!< what loading the file dropped, triangulated or ignored (zeros for scenes)
   //! Why F is not a manifold, orientable triangle mesh with at least one face, in words with ids (see
   //! SurfaceCheck::problem, e.g. "no faces (a point cloud)"); empty when it is one. Surface methods need
   //! one (require_surface); space methods deform any input.

@@ -26,6 +26,7 @@ namespace {
 struct FileContents {
   std::vector<Vec3> points;
   std::vector<int> corners, offsets{0}, lines;
+  int first_ignored_line = 0;  // OFF and ASCII PLY: the first line of data after the header's counts
 };
 
 // The line of text that starts at pos, without its break (LF, CR LF or CR); pos moves past the break.
@@ -160,6 +161,9 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
     soup.offsets.push_back(static_cast<int>(soup.corners.size()));
     soup.lines.push_back(reader.number());
   }
+  // More records than the header counts (CGAL's prim.off has a face too many): read as counted, as
+  // other readers do, and reported.
+  if (reader.next(line)) soup.first_ignored_line = reader.number();
   return soup;
 }
 
@@ -176,10 +180,20 @@ FileContents read_obj(std::string_view text, const std::string& path, const std:
       int n = 0;
       for (std::string_view tok = next_token(line); !tok.empty(); tok = next_token(line), ++n) {
         const long idx = parse_number<long>(tok.substr(0, tok.find('/')), reader, "a vertex index");
+        // v/vt/vn, v//vn, v/vt: the texture and normal indices are not used, but must be numbers.
+        for (size_t slash = tok.find('/'); slash != std::string_view::npos;) {
+          const size_t next = tok.find('/', slash + 1);
+          const std::string_view part = tok.substr(slash + 1, next == std::string_view::npos ? next : next - slash - 1);
+          if (!part.empty() || next == std::string_view::npos) parse_number<long>(part, reader, "a texture or normal index");
+          slash = next;
+        }
         if (idx == 0) reader.fail("vertex index 0 (OBJ indices start at 1)");
-        // Negative indices count back from the last vertex read so far.
-        const long zero_based = idx > 0 ? idx - 1 : nv + idx;
-        soup.corners.push_back(static_cast<int>(std::clamp(zero_based, -1L, static_cast<long>(INT32_MAX))));
+        if (idx < -nv) reader.fail("relative vertex index " + std::to_string(idx) + " reaches before the first vertex (" +
+                                   std::to_string(nv) + " vertices so far)");
+        if (idx > INT32_MAX) reader.fail("vertex index " + std::to_string(idx) + " is out of range");
+        // Negative indices count back from the last vertex read so far; positive ones may name a vertex
+        // defined later in the file (checked below).
+        soup.corners.push_back(static_cast<int>(idx > 0 ? idx - 1 : nv + idx));
       }
       if (n < 3) reader.fail("face has " + std::to_string(n) + " corners (at least 3 needed)");
       soup.offsets.push_back(static_cast<int>(soup.corners.size()));
@@ -192,6 +206,13 @@ FileContents read_obj(std::string_view text, const std::string& path, const std:
              }))
       reader.fail("not an OBJ statement: '" + printable(key.substr(0, 40)) + "'");
   }
+  // Indices in OBJ's own numbering (from 1), so the message matches the file.
+  for (size_t f = 0; f + 1 < soup.offsets.size(); ++f)
+    for (int c = soup.offsets[f]; c < soup.offsets[f + 1]; ++c)
+      if (soup.corners[c] >= static_cast<int>(soup.points.size()))
+        throw InvalidInput(who + ": " + path + " line " + std::to_string(soup.lines[f]) + ": face has vertex index " +
+                           std::to_string(soup.corners[c] + 1) + ", out of range: the file has " +
+                           std::to_string(soup.points.size()) + " vertices (OBJ indices start at 1)");
   return soup;
 }
 
@@ -244,9 +265,7 @@ class PlyReader {
     }
     if (!binary_) {
       skip_space();
-      if (pos_ < text_.size())
-        fail("data after the last element ('" +
-             printable(text_.substr(pos_, std::min<size_t>(20, text_.find_first_of("\r\n", pos_) - pos_))) + "')");
+      if (pos_ < text_.size()) soup.first_ignored_line = line_;
     }
     return soup;
   }
@@ -559,6 +578,7 @@ TriangleSoup triangulate(const FileContents& soup, const std::string& path, cons
   const int nv = static_cast<int>(soup.points.size());
   const int npoly = static_cast<int>(soup.offsets.size()) - 1;
   if (nv == 0) throw InvalidInput(who + ": " + path + " has no vertices");
+  report.first_ignored_line = soup.first_ignored_line;
   TriangleSoup out;
   out.P.resize(nv, 3);
   for (int i = 0; i < nv; ++i) out.P.row(i) = soup.points[i];

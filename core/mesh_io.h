@@ -14,6 +14,9 @@ struct LoadReport {
   int degenerate_faces_skipped = 0;  //!< faces that repeat a vertex index (dropped)
   int duplicate_faces_dropped = 0;   //!< triangles with the vertex set of an earlier one (dropped)
   int faces_flipped = 0;             //!< load_mesh: triangles turned over to agree with their neighbours
+  //! OFF and ASCII PLY: the first line of data after the header's counts (ignored: the file holds more
+  //! than its header declares), or 0.
+  int first_ignored_line = 0;
 };
 
 //! A file's vertices and triangles, whatever they form: a point cloud, a soup, a non-manifold or

@@ -27,7 +27,9 @@ void join_close(const Positions& P, const std::vector<int>& ids, double eps, Dis
   using Cell = std::array<std::int64_t, 3>;
   struct Hash {
     size_t operator()(const Cell& c) const {
-      return static_cast<size_t>(c[0] * 73856093) ^ static_cast<size_t>(c[1] * 19349663) ^ static_cast<size_t>(c[2] * 83492791);
+      // Unsigned arithmetic: the products wrap (the cells of far points overflowed a signed multiply).
+      const auto u = [](std::int64_t x) { return static_cast<std::uint64_t>(x); };
+      return static_cast<size_t>((u(c[0]) * 73856093u) ^ (u(c[1]) * 19349663u) ^ (u(c[2]) * 83492791u));
     }
   };
   std::unordered_map<Cell, std::vector<int>, Hash> grid;

@@ -11,7 +11,7 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 build="$root/build-fuzz"
 seconds="${MSD_FUZZ_SECONDS:-60}"
 jobs="${MSD_JOBS:-$(nproc)}"
-bash "$root/scripts/setup.sh"
+bash "$root/scripts/setup.sh" clang-14 libclang-rt-14-dev
 
 # Only msd::core and the fuzzers are built; the library is instrumented for coverage too.
 flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -gline-tables-only"

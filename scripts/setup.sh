@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages msdeform needs. Idempotent: when everything is present it only checks
 # (well under a second) and touches nothing. Needs root (or sudo) only when something is missing.
+# Extra package names given as arguments are installed too (scripts/fuzz.sh adds clang and its runtime).
 set -euo pipefail
 
 packages=(
@@ -10,6 +11,7 @@ packages=(
   catch2 libcli11-dev libstb-dev
   pybind11-dev python3-dev python3-numpy python3-pytest
   libcgal-demo
+  "$@"
 )
 
 missing=()

@@ -65,6 +65,9 @@ void add_deform_command(CLI::App& app) {
       std::fprintf(stderr, "warning: %d boundary vertices lie at the coordinates of another boundary vertex (a mesh "
                            "split along seams): it deforms as separate pieces there; --weld 0 joins them\n",
                    c.seam_vertices);
+    if (c.load_report.first_ignored_line > 0)
+      std::fprintf(stderr, "warning: %s holds more than its header declares: data from line %d on was ignored\n",
+                   c.path.c_str(), c.load_report.first_ignored_line);
     std::unique_ptr<Deformer> deformer = method->make(c);
     if (deformer->traits().domain == DeformerDomain::Surface) require_surface(c, method->method_name());
     const auto* space = dynamic_cast<const SpaceDeformer*>(deformer.get());

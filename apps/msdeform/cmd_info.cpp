@@ -30,6 +30,8 @@ void print_info(const std::string& what, const MeshInfo& i, const LoadReport* re
     std::printf("  polygons triangulated %d\n", report->polygons_triangulated);
     std::printf("  repeated-index faces  %d (dropped)\n", report->degenerate_faces_skipped);
     std::printf("  duplicate faces       %d (dropped)\n", report->duplicate_faces_dropped);
+    if (report->first_ignored_line > 0)
+      std::printf("  ignored data          from line %d (more than the header's counts)\n", report->first_ignored_line);
   }
   std::printf("  bounding box          [%.6g %.6g %.6g] .. [%.6g %.6g %.6g]\n", i.bbox_min.x(), i.bbox_min.y(),
               i.bbox_min.z(), i.bbox_max.x(), i.bbox_max.y(), i.bbox_max.z());

@@ -308,6 +308,7 @@ py::dict load_report(const msd::LoadReport& r) {
   d["degenerate_faces_skipped"] = r.degenerate_faces_skipped;
   d["duplicate_faces_dropped"] = r.duplicate_faces_dropped;
   d["faces_flipped"] = r.faces_flipped;
+  d["first_ignored_line"] = r.first_ignored_line;
   return d;
 }
 

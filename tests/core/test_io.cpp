@@ -423,19 +423,49 @@ TEST_CASE("PLY: big-endian data reads, and headers and items that disagree are r
   end_junk.insert(end_junk.size() - 1, " junk");
   CHECK_THROWS_WITH(load_soup(write("endjunk.ply", end_junk + vertices + "3 0 1 2\n")),
                     Contains("line 9") && Contains("unexpected 'junk'"));
-  // The data: one item per line, integer indices, nothing after the last element.
+  // The data: one item per line, integer indices; data after the last element is reported.
   CHECK_THROWS_WITH(load_soup(write("extra.ply", head + vertices + "3 0 1 2 7\n")),
                     Contains("line 13") && Contains("face 0 has more values than the header's 1 properties ('7"));
   CHECK_THROWS_WITH(load_soup(write("extrav.ply", head + "0 0 0 5\n1 0 0\n0 1 0\n3 0 1 2\n")),
                     Contains("vertex 0 has more values"));
-  CHECK_THROWS_WITH(load_soup(write("after.ply", head + vertices + "3 0 1 2\n3 0 2 1\n")),
-                    Contains("data after the last element ('3 0 2 1"));
+  LoadReport report;
+  CHECK(load_soup(write("after.ply", head + vertices + "3 0 1 2\n3 0 2 1\n"), &report).F.rows() == 1);
+  CHECK(report.first_ignored_line == 14);
   CHECK_THROWS_WITH(load_soup(write("half.ply", head + vertices + "3 0 1.5 2\n")),
                     Contains("vertex index 1.5, not an integer"));
   CHECK_THROWS_WITH(load_soup(write("neg.ply", head + vertices + "3 0 -5 2\n")),
                     Contains("line 13") && Contains("index -5 out of range"));
   CHECK_THROWS_WITH(load_soup(write("two.ply", head + vertices + "2 0 1\n")),
                     Contains("face 0 has a list of 2 items"));
+}
+
+// Issue 14, break test: OBJ indices are reported in the file's numbering, corner fields must be numbers,
+// and the line where an OFF holds more than its header counts is reported (the extra faces were dropped
+// silently).
+TEST_CASE("OBJ and OFF: indices named as the file numbers them, malformed corners refused, uncounted faces reported",
+          "[core][io][bad-input]") {
+  test::TempDir tmp;
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(tmp.file(name), std::ios::binary) << text;
+    return tmp.file(name);
+  };
+  const std::string v = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  CHECK(load_soup(write("later.obj", "f 1 2 3\n" + v)).F.rows() == 1);  // a face may name later vertices
+  CHECK(load_soup(write("fields.obj", v + "vt 0 0\nvn 0 0 1\nf 1/1/1 2//1 3/1\n")).F.rows() == 1);
+  CHECK_THROWS_WITH(load_soup(write("range.obj", v + "f 1 2 4\n")),
+                    Contains("line 4") && Contains("vertex index 4, out of range: the file has 3 vertices"));
+  CHECK_THROWS_WITH(load_soup(write("huge.obj", v + "f 1 2 9999999999\n")),
+                    Contains("line 4") && Contains("9999999999 is out of range"));
+  CHECK_THROWS_WITH(load_soup(write("back.obj", v + "f -1 -2 -4\n")),
+                    Contains("line 4") && Contains("-4 reaches before the first vertex (3 vertices so far)"));
+  CHECK_THROWS_WITH(load_soup(write("x.obj", v + "f 1/x 2 3\n")), Contains("line 4") && Contains("found 'x'"));
+  CHECK_THROWS_WITH(load_soup(write("slash.obj", v + "f 1/ 2 3\n")), Contains("missing a texture or normal index"));
+  // CGAL's prim.off counts 7 faces and holds 8: read as counted (as CGAL does), and reported.
+  LoadReport report;
+  CHECK(load_soup(write("extra.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n"), &report).F.rows() == 1);
+  CHECK(report.first_ignored_line == 7);
+  CHECK(load_soup(write("blank.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n# end\n\n"), &report).F.rows() == 1);
+  CHECK(report.first_ignored_line == 0);
 }
 
 // Issue 14, kind 7: files that other tools write and read read right, and messages point at the fault.

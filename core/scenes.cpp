@@ -1,6 +1,7 @@
 #include "msdeform/core/scenes.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -258,20 +259,14 @@ void write_scene(const Scene& scene, const std::string& dir) {
 }
 
 int parse_resolution(const std::string& text) {
-  size_t used = 0;
-  double value = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  std::string suffix = text.substr(used);
-  if (suffix == "k" || suffix == "K")
-    value *= 1e3;
-  else if (suffix == "m" || suffix == "M")
-    value *= 1e6;
-  else if (!suffix.empty() || used == 0)
-    value = -1;
+  // Decimal digits (std::from_chars: no hex, no leading space or sign), then an optional k or M.
+  double value = -1;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  const std::string suffix = ec == std::errc() ? text.substr(end - text.data()) : "";
+  if (ec != std::errc() || !std::isfinite(value)) value = -1;
+  else if (suffix == "k" || suffix == "K") value *= 1e3;
+  else if (suffix == "m" || suffix == "M") value *= 1e6;
+  else if (!suffix.empty()) value = -1;
   if (!(value >= 16 && value <= 2e7))
     throw InvalidInput("resolution '" + text + "': expected a vertex count from 16 to 20M, like 10000, 100k or 1M");
   return static_cast<int>(std::lround(value));

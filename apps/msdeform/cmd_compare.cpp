@@ -243,6 +243,11 @@ void add_compare_command(CLI::App& app) {
     std::vector<std::string> scenes = a->scenes;
     if (scenes.empty() && a->mesh.empty() && a->survey.empty()) scenes = default_scenes();
     const int resolution = parse_resolution(a->resolution);
+    {
+      std::error_code ec;  // an -o that is a file fails here, not after the scenes are built
+      if (fs::exists(a->output, ec) && !fs::is_directory(a->output, ec))
+        throw InvalidInput("-o " + a->output + " is a file; compare writes a folder (pages, images, meshes) there");
+    }
     std::vector<EditCase> cases;
     for (const auto& s : scenes) {
       std::fprintf(stderr, "building scene %s (%s vertices)\n", s.c_str(), a->resolution.c_str());

@@ -24,7 +24,8 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version exit 0; a usage error (unknown option, bad value) exits 2, as other tools do.
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const msd::Error& e) {
     std::cerr << "msdeform: error: " << e.what() << "\n";
     return 1;
@@ -36,7 +37,7 @@ int main(int argc, char** argv) {
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "msdeform: internal error: " << e.what() << " (please report it with the command line)\n";
-    return 2;
+    return 70;  // EX_SOFTWARE
   }
   return 0;
 }

@@ -54,7 +54,16 @@ name=$(printf 'b%.0s' $(seq 246)).off
   -o geodesic.off >/dev/null || fail "--geodesic-time-factor"
 
 # Option ranges read as ranges.
-expect_error 105 "not in range 1 to 1000000" "$msdeform" deform --scene lift --method arap --iterations 0 -o x.off
+# Usage errors exit 2 (CLI11's own codes, 105 and up, before).
+expect_error 2 "not in range 1 to 1000000" "$msdeform" deform --scene lift --method arap --iterations 0 -o x.off
+expect_error 2 "--bogus" "$msdeform" deform --scene lift --bogus -o x.off
+# compare -o naming a file fails before any scene is built.
+touch not-a-folder
+expect_error 1 "is a file; compare writes a folder" "$msdeform" compare --scenes lift -o not-a-folder
+grep -q "building scene" err.txt && fail "compare built scenes before refusing -o"
+# A resolution is decimal (0x10 was read as hexadecimal 16).
+expect_error 1 "resolution '0x10'" "$msdeform" scene lift --resolution 0x10 -o .
+expect_error 1 "resolution ' 100'" "$msdeform" scene lift --resolution " 100" -o .
 
 # compare: a run that fails makes the exit status non-zero (the pages are still written).
 printf 'OFF\n4 0 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n' >cloud.off

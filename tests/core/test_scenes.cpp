@@ -72,4 +72,8 @@ TEST_CASE("unknown scene names and bad resolutions are reported", "[core][scenes
   CHECK_THROWS_AS(parse_resolution("many"), InvalidInput);
   CHECK_THROWS_AS(parse_resolution("10"), InvalidInput);
   CHECK_THROWS_AS(parse_resolution("5x"), InvalidInput);
+  // Decimal only: hexadecimal, white space, signs, inf and nan were read by std::stod.
+  CHECK(parse_resolution("2.5k") == 2500);
+  for (const char* bad : {"0x10", " 100", "+100", "inf", "nan", "1e400", "", "k"})
+    CHECK_THROWS_WITH(parse_resolution(bad), Contains("expected a vertex count"));
 }

@@ -29,14 +29,26 @@ struct FileContents {
   int first_ignored_line = 0;  // OFF and ASCII PLY: the first line of data after the header's counts
 };
 
+// Longest line a text reader looks through for its end: a text file's line is far shorter, so a bad file
+// (binary data, gigabytes without a break) fails after this much instead of being scanned whole.
+constexpr size_t kMaxLine = size_t{64} << 20;
+
+enum class LineEnd { Break, EndOfText, TooLong };
+
 // The line of text that starts at pos, without its break (LF, CR LF or CR); pos moves past the break.
-// Returns false, leaving pos, when no break follows (the line runs to the end of the text).
-bool take_line(std::string_view text, size_t& pos, std::string_view& line) {
-  const size_t end = text.find_first_of("\r\n", pos);
-  line = text.substr(pos, end == std::string_view::npos ? std::string_view::npos : end - pos);
-  if (end == std::string_view::npos) return false;
-  pos = end + (text.substr(end, 2) == "\r\n" ? 2 : 1);
-  return true;
+// EndOfText, leaving pos, when no break follows (the line runs to the end of the text); TooLong when no
+// break comes within kMaxLine bytes.
+LineEnd take_line(std::string_view text, size_t& pos, std::string_view& line) {
+  const std::string_view window = text.substr(pos, kMaxLine + 1);
+  const size_t end = window.find_first_of("\r\n");
+  line = window.substr(0, end);
+  if (end == std::string_view::npos) return window.size() > kMaxLine ? LineEnd::TooLong : LineEnd::EndOfText;
+  pos += end + (window.substr(end, 2) == "\r\n" ? 2 : 1);
+  return LineEnd::Break;
+}
+
+std::string too_long_message() {
+  return "no line break within " + std::to_string(kMaxLine >> 20) + " MiB (binary data, or not a text file)";
 }
 
 // Splits text into lines with '#' comments stripped, numbering them from 1. Lines end in LF, CR LF or CR.
@@ -48,8 +60,10 @@ class LineReader {
   // Next line that has content; false at the end of the text.
   bool next(std::string_view& line) {
     while (pos_ < text_.size()) {
-      if (!take_line(text_, pos_, line)) pos_ = text_.size();  // the last line, without a break
+      const LineEnd end = take_line(text_, pos_, line);
       ++number_;
+      if (end == LineEnd::TooLong) fail(too_long_message());
+      if (end == LineEnd::EndOfText) pos_ = text_.size();  // the last line, without a break
       if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
       while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.remove_suffix(1);
       while (!line.empty() && std::isspace(static_cast<unsigned char>(line.front()))) line.remove_prefix(1);
@@ -89,6 +103,8 @@ T parse_number(std::string_view tok, const LineReader& reader, const char* what)
   const char* first = tok.data();
   if (*first == '+') ++first;
   auto [ptr, ec] = std::from_chars(first, tok.data() + tok.size(), value);
+  if (ec == std::errc::result_out_of_range && ptr == tok.data() + tok.size())
+    reader.fail(std::string(what) + " '" + printable(tok.substr(0, 40)) + "' is out of range");
   if (ec != std::errc() || ptr != tok.data() + tok.size())
     reader.fail(std::string("expected ") + what + ", found '" + printable(tok.substr(0, 40)) + "'");
   return value;
@@ -290,16 +306,19 @@ class PlyReader {
 
   void parse_header() {
     std::string_view first;
-    take_line(text_, pos_, first);
+    const LineEnd first_end = take_line(text_, pos_, first);
     line_ = 1;
     if (first.substr(0, 3) != "ply")
       throw InvalidInput(who_ + ": " + path_ + " is not a PLY file (it does not start with 'ply')");
+    if (first_end == LineEnd::TooLong) fail(too_long_message());
     if (first != "ply") fail("the first line must be 'ply' alone, found '" + printable(first.substr(0, 40)) + "'");
     bool has_format = false;
     while (true) {
       std::string_view line;
-      if (!take_line(text_, pos_, line)) fail("header has no 'end_header'");
+      const LineEnd end = take_line(text_, pos_, line);
       ++line_;
+      if (end == LineEnd::TooLong) fail(too_long_message());
+      if (end == LineEnd::EndOfText) fail("header has no 'end_header'");
       const std::string_view key = next_token(line);
       // Every header line is parsed whole: a word too many is an error, not ignored.
       const auto end_of_line = [&]() {
@@ -412,8 +431,9 @@ class PlyReader {
       // ASCII: next whitespace-separated token, counting lines.
       skip_space();
       size_t e = pos_;
-      while (e < text_.size() && !std::isspace(static_cast<unsigned char>(text_[e]))) ++e;
+      while (e < text_.size() && e - pos_ < 400 && !std::isspace(static_cast<unsigned char>(text_[e]))) ++e;
       if (e == pos_) fail("file ends inside the data");
+      if (e - pos_ == 400) fail("a value of 400 bytes or more ('" + printable(text_.substr(pos_, 20)) + "...')");
       double x = 0;
       const char* first = text_.data() + pos_;
       auto [ptr, ec] = std::from_chars(first, text_.data() + e, x);
@@ -509,6 +529,8 @@ FileContents read_stl(std::string_view text, const std::string& path, const std:
   std::uint32_t count = 0;
   if (text.size() >= 84) std::memcpy(&count, text.data() + 80, 4);
   const bool binary = text.size() >= 84 && text.size() == 84 + 50ull * count;
+  // ASCII STL holds no NUL byte; a binary header that starts with "solid" usually does.
+  const bool has_nul = text.substr(0, 1024).find('\0') != std::string_view::npos;
   if (binary) {  // even when its 80-byte header starts with "solid", as some writers do
     for (std::uint32_t t = 0; t < count; ++t) {
       float xyz[12];  // normal, then three corners
@@ -523,7 +545,7 @@ FileContents read_stl(std::string_view text, const std::string& path, const std:
       soup.offsets.push_back(static_cast<int>(soup.corners.size()));
       soup.lines.push_back(0);
     }
-  } else if (text.substr(0, 5) == "solid") {
+  } else if (text.substr(0, 5) == "solid" && !has_nul) {
     // ASCII: solid / facet normal / outer loop / vertex x y z ... / endloop / endfacet / endsolid.
     LineReader reader(text, path, who);
     std::string_view line;
@@ -551,8 +573,9 @@ FileContents read_stl(std::string_view text, const std::string& path, const std:
   } else if (text.size() < 84) {
     throw InvalidInput(who + ": " + path + " is too short to be a binary STL file");
   } else {
-    throw InvalidInput(who + ": " + path + " is not an STL file (binary size does not match its " +
-                       std::to_string(count) + " triangles, and it does not start with 'solid')");
+    throw InvalidInput(who + ": " + path + " is not an STL file (binary size " + std::to_string(text.size()) +
+                       " bytes does not match its " + std::to_string(count) + " triangles (" +
+                       std::to_string(84 + 50ull * count) + " bytes), and it is not ASCII STL)");
   }
   if (soup.offsets.size() == 1)
     throw InvalidInput(who + ": " + path + " has no triangles (an STL file is a list of triangles)");

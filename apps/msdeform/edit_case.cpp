@@ -1,5 +1,6 @@
 #include "apps/msdeform/edit_case.h"
 
+#include <cstdio>
 #include <filesystem>
 
 #include "msdeform/core/atomic_file.h"
@@ -37,6 +38,10 @@ void EditCaseOptions::check_output(const std::string& output, const char* option
                                    const std::vector<std::string>& other_inputs) const {
   check_mesh_format(output, option);
   check_writable(output, option);
+  if (file_extension(output) == ".stl")
+    std::fprintf(stderr, "warning: %s %s: STL keeps no vertex list, so the file loads with its vertices renumbered "
+                         "(unused ones lost, coincident ones merged) and the input's .sel no longer applies; .ply, "
+                         ".off and .obj keep them\n", option, output.c_str());
   if (force) return;
   std::vector<std::string> inputs = {mesh, sel, def};
   inputs.insert(inputs.end(), other_inputs.begin(), other_inputs.end());

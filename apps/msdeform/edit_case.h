@@ -19,7 +19,8 @@ struct EditCaseOptions {
   void add_to(CLI::App& cmd);
   // Before any work: output (named by option, e.g. "-o") has a known mesh format and can be written
   // (check_writable), and is none of the inputs (the edit's files and other_inputs) unless --force.
-  // Throws InvalidInput naming the option and the path.
+  // Warns that an STL output will not keep the input's vertices. Throws InvalidInput naming the option
+  // and the path.
   void check_output(const std::string& output, const char* option,
                     const std::vector<std::string>& other_inputs = {}) const;
   // Loads the files or builds the scene. Throws InvalidInput naming the file or the mismatch. Without

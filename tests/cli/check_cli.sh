@@ -57,6 +57,9 @@ name=$(printf 'b%.0s' $(seq 246)).off
 # Usage errors exit 2 (CLI11's own codes, 105 and up, before).
 expect_error 2 "not in range 1 to 1000000" "$msdeform" deform --scene lift --method arap --iterations 0 -o x.off
 expect_error 2 "--bogus" "$msdeform" deform --scene lift --bogus -o x.off
+# STL output keeps no vertex list: said before the work.
+"$msdeform" deform --scene lift --resolution 2k --method shell -o lifted.stl >/dev/null 2>err.txt || fail "deform to STL"
+grep -q "STL keeps no vertex list" err.txt || fail "no warning that STL output renumbers the vertices"
 # compare -o naming a file fails before any scene is built.
 touch not-a-folder
 expect_error 1 "is a file; compare writes a folder" "$msdeform" compare --scenes lift -o not-a-folder

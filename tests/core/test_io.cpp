@@ -10,6 +10,7 @@
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh_info.h"
 #include "msdeform/core/mesh_io.h"
+#include "msdeform/core/region.h"
 #include "msdeform/core/scenes.h"
 #include "msdeform/core/surface_check.h"
 #include "test_util.h"
@@ -466,6 +467,36 @@ TEST_CASE("OBJ and OFF: indices named as the file numbers them, malformed corner
   CHECK(report.first_ignored_line == 7);
   CHECK(load_soup(write("blank.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n# end\n\n"), &report).F.rows() == 1);
   CHECK(report.first_ignored_line == 0);
+}
+
+// Issue 14, second break test: a bad file costs what is read of it even when its bad line is huge (a
+// 2 GB file of NUL bytes was scanned whole for a line break, 2.1 GB resident), a binary STL whose header
+// starts with "solid" is reported as binary, and numbers out of range are called that.
+TEST_CASE("huge bad lines fail within a bounded read, and binary STL behind 'solid' is named", "[core][io][bad-input]") {
+  test::TempDir tmp;
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(tmp.file(name), std::ios::binary) << text;
+    return tmp.file(name);
+  };
+  const std::string nul(65 << 20, '\0');  // 65 MiB without a line break
+  CHECK_THROWS_WITH(load_soup(write("nul.off", "OFF\n3 1 0\n" + nul)),
+                    Contains("line 3") && Contains("no line break within 64 MiB"));
+  CHECK_THROWS_WITH(load_soup(write("nul.obj", "v 0 0 0\n" + nul)), Contains("line 2") && Contains("64 MiB"));
+  CHECK_THROWS_WITH(load_soup(write("nul.ply", "ply\n" + nul)), Contains("line 2") && Contains("64 MiB"));
+  const std::string ply = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                          "property float z\nend_header\n";
+  CHECK_THROWS_WITH(load_soup(write("long.ply", ply + std::string(1000, '7'))), Contains("a value of 400 bytes or more"));
+  CHECK_THROWS_WITH(read_sel(write("long.sel", std::string(1000, '1')), 3), Contains("line 1") && Contains("found '111"));
+  // Binary STL with a "solid" header and a count that does not match the size.
+  std::string stl = "solid but binary";
+  stl.resize(80, '\0');
+  const std::uint32_t count = 5;
+  stl.append(reinterpret_cast<const char*>(&count), 4);
+  stl.append(2 * 50, '\0');
+  CHECK_THROWS_WITH(load_soup(write("lie.stl", stl)),
+                    Contains("binary size 184 bytes does not match its 5 triangles (334 bytes)"));
+  CHECK_THROWS_WITH(load_soup(write("big.off", "OFF\n3 1 0\n0 0 1e400\n1 0 0\n0 1 0\n3 0 1 2\n")),
+                    Contains("line 3") && Contains("a coordinate '1e400' is out of range"));
 }
 
 // Issue 14, kind 7: files that other tools write and read read right, and messages point at the fault.

@@ -254,7 +254,7 @@ class PlyReader {
             if (e.name == "vertex" && prop.coordinate >= 0) p[prop.coordinate] = x;
             continue;
           }
-          const double n = value(prop.list_count_type);  // an integer type (check_header)
+          const double n = value(prop.list_count_type);  // an integer type (parse_header)
           const bool indices = e.name == "face" && (prop.name == "vertex_indices" || prop.name == "vertex_index");
           if (n < (indices ? 3 : 0) || n > (1 << 20))
             fail(e.name + " " + std::to_string(i) + " has a list of " + std::to_string(static_cast<long long>(n)) +
@@ -311,6 +311,7 @@ class PlyReader {
     if (first.substr(0, 3) != "ply")
       throw InvalidInput(who_ + ": " + path_ + " is not a PLY file (it does not start with 'ply')");
     if (first_end == LineEnd::TooLong) fail(too_long_message());
+    while (!first.empty() && (first.back() == ' ' || first.back() == '\t')) first.remove_suffix(1);
     if (first != "ply") fail("the first line must be 'ply' alone, found '" + printable(first.substr(0, 40)) + "'");
     bool has_format = false;
     while (true) {
@@ -428,8 +429,10 @@ class PlyReader {
 
   double value(const std::string& type) {
     if (!binary_) {
-      // ASCII: next whitespace-separated token, counting lines.
-      skip_space();
+      // ASCII: the next value on the item's line (read() skips to the item's first value).
+      while (pos_ < text_.size() && (text_[pos_] == ' ' || text_[pos_] == '\t')) ++pos_;
+      if (pos_ < text_.size() && (text_[pos_] == '\n' || text_[pos_] == '\r'))
+        fail("the line ends before the item's last value (the header declares more)");
       size_t e = pos_;
       while (e < text_.size() && e - pos_ < 400 && !std::isspace(static_cast<unsigned char>(text_[e]))) ++e;
       if (e == pos_) fail("file ends inside the data");

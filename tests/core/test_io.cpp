@@ -429,6 +429,10 @@ TEST_CASE("PLY: big-endian data reads, and headers and items that disagree are r
                     Contains("line 13") && Contains("face 0 has more values than the header's 1 properties ('7"));
   CHECK_THROWS_WITH(load_soup(write("extrav.ply", head + "0 0 0 5\n1 0 0\n0 1 0\n3 0 1 2\n")),
                     Contains("vertex 0 has more values"));
+  CHECK_THROWS_WITH(load_soup(write("short.ply", head + "0 0\n0 1 0 0\n0 1 0\n3 0 1 2\n")),
+                    Contains("line 10") && Contains("the line ends before the item's last value"));
+  CHECK_THROWS_WITH(load_soup(write("wrapped.ply", head + vertices + "3 0 1\n2\n")),
+                    Contains("line 13") && Contains("the line ends before"));
   LoadReport report;
   CHECK(load_soup(write("after.ply", head + vertices + "3 0 1 2\n3 0 2 1\n"), &report).F.rows() == 1);
   CHECK(report.first_ignored_line == 14);

@@ -372,6 +372,14 @@ class PlyReader {
       } else if (key == "end_header") {
         end_of_line();
         if (!has_format) fail("the header has no 'format' line");
+        // A face element must list its corners (other names would drop every face without a word).
+        for (const Element& e : elements_) {
+          if (e.name != "face" || e.count == 0) continue;
+          if (std::none_of(e.props.begin(), e.props.end(), [](const Property& prop) {
+                return !prop.list_count_type.empty() && (prop.name == "vertex_indices" || prop.name == "vertex_index");
+              }))
+            fail("the face element has no list property 'vertex_indices' (or 'vertex_index')");
+        }
         // A vertex element must have x, y and z (other spellings, e.g. X Y Z, would read as zeros).
         for (const Element& e : elements_) {
           if (e.name != "vertex" || e.count == 0) continue;

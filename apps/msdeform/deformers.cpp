@@ -145,7 +145,7 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
                                            "by more than this fraction of the bounding-box diagonal; 0: exactly "
                                            "--iterations (default: arap " + compact(ArapOptions{}.tolerance) +
                                                ", primo " + compact(PrimoOptions{}.tolerance) + ")")
-                         ->check(CLI::NonNegativeNumber);
+                         ->check(CLI::Range(0.0, 1.0));  // a fraction (NonNegativeNumber printed DBL_MAX)
   scoped_options.push_back({iterations_option, {"arap", "primo"}});
   scoped_options.push_back({tolerance_option, {"arap", "primo"}});
   auto* arap = cmd.add_option_group("arap", "arap: as-rigid-as-possible (9.8)");

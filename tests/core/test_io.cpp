@@ -420,6 +420,10 @@ TEST_CASE("PLY: big-endian data reads, and headers and items that disagree are r
   twice.insert(twice.find("property float z"), "property float y\n");
   CHECK_THROWS_WITH(load_soup(write("twice.ply", twice + vertices + "3 0 1 2\n")),
                     Contains("line 6") && Contains("two properties named 'y'"));
+  std::string other_list = head;
+  other_list.replace(other_list.find("vertex_indices"), 14, "corners");
+  CHECK_THROWS_WITH(load_soup(write("otherlist.ply", other_list + vertices + "3 0 1 2\n")),
+                    Contains("line 9") && Contains("no list property 'vertex_indices'"));
   std::string end_junk = head;
   end_junk.insert(end_junk.size() - 1, " junk");
   CHECK_THROWS_WITH(load_soup(write("endjunk.ply", end_junk + vertices + "3 0 1 2\n")),

@@ -1,10 +1,10 @@
 #pragma once
 // Shared helpers for the tests: generated meshes, data paths and temporary folders.
 
-#include <filesystem>
-#include <fstream>
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <random>
 #include <string>
@@ -62,6 +62,11 @@ struct TempDir {
     std::filesystem::remove_all(path, ec);
   }
   std::string file(const std::string& name) const { return (path / name).string(); }
+  //! Writes text (bytes as they are) to the file name in this folder and returns its path.
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(file(name), std::ios::binary) << text;
+    return file(name);
+  }
 };
 
 //! Largest distance between corresponding rows of A and B (same shape required).

@@ -289,10 +289,7 @@ TEST_CASE("an edit case keeps any input and says why a surface method cannot tak
 
 TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[core][io][bad-input]") {
   test::TempDir tmp;
-  auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(tmp.file(name), std::ios::binary) << text;
-    return tmp.file(name);
-  };
+  const auto write = [&](const std::string& name, const std::string& text) { return tmp.write(name, text); };
   CHECK_THROWS_WITH(load_mesh(tmp.file("missing.off")), Contains("cannot open") && Contains("missing.off"));
   std::string garbage;
   for (int i = 0; i < 4096; ++i) garbage.push_back(static_cast<char>((i * 7919 + 13) % 256));
@@ -330,10 +327,7 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
 // reader stops at the first bad line without reading the rest of the file.
 TEST_CASE("readers refuse counts the file cannot hold and stop at the first bad line", "[core][io][bad-input]") {
   test::TempDir tmp;
-  auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(tmp.file(name), std::ios::binary) << text;
-    return tmp.file(name);
-  };
+  const auto write = [&](const std::string& name, const std::string& text) { return tmp.write(name, text); };
   const std::string ply = "ply\nformat ascii 1.0\n";
   // A vertex count of 4e9 (no data): refused, not 1.5 GB/s of growth.
   CHECK_THROWS_WITH(load_soup(write("huge.ply", ply + "element vertex 4000000000\nproperty float x\nproperty float y\n"
@@ -376,10 +370,7 @@ TEST_CASE("readers refuse counts the file cannot hold and stop at the first bad 
 // leniencies it reached.
 TEST_CASE("PLY: big-endian data reads, and headers and items that disagree are refused by line", "[core][io][bad-input]") {
   test::TempDir tmp;
-  auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(tmp.file(name), std::ios::binary) << text;
-    return tmp.file(name);
-  };
+  const auto write = [&](const std::string& name, const std::string& text) { return tmp.write(name, text); };
   const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
   const std::string vertices = "0 0 0\n1 0 0\n0 1 0\n";
@@ -454,10 +445,7 @@ TEST_CASE("PLY: big-endian data reads, and headers and items that disagree are r
 TEST_CASE("OBJ and OFF: indices named as the file numbers them, malformed corners refused, uncounted faces reported",
           "[core][io][bad-input]") {
   test::TempDir tmp;
-  auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(tmp.file(name), std::ios::binary) << text;
-    return tmp.file(name);
-  };
+  const auto write = [&](const std::string& name, const std::string& text) { return tmp.write(name, text); };
   const std::string v = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
   CHECK(load_soup(write("later.obj", "f 1 2 3\n" + v)).F.rows() == 1);  // a face may name later vertices
   CHECK(load_soup(write("fields.obj", v + "vt 0 0\nvn 0 0 1\nf 1/1/1 2//1 3/1\n")).F.rows() == 1);
@@ -482,10 +470,7 @@ TEST_CASE("OBJ and OFF: indices named as the file numbers them, malformed corner
 // starts with "solid" is reported as binary, and numbers out of range are called that.
 TEST_CASE("huge bad lines fail within a bounded read, and binary STL behind 'solid' is named", "[core][io][bad-input]") {
   test::TempDir tmp;
-  auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(tmp.file(name), std::ios::binary) << text;
-    return tmp.file(name);
-  };
+  const auto write = [&](const std::string& name, const std::string& text) { return tmp.write(name, text); };
   const std::string nul(65 << 20, '\0');  // 65 MiB without a line break
   CHECK_THROWS_WITH(load_soup(write("nul.off", "OFF\n3 1 0\n" + nul)),
                     Contains("line 3") && Contains("no line break within 64 MiB"));
@@ -510,10 +495,7 @@ TEST_CASE("huge bad lines fail within a bounded read, and binary STL behind 'sol
 // Issue 14, kind 7: files that other tools write and read read right, and messages point at the fault.
 TEST_CASE("glued OFF headers, wrapped records, CR line ends and byte-order marks read right", "[core][io]") {
   test::TempDir tmp;
-  auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(tmp.file(name), std::ios::binary) << text;
-    return tmp.file(name);
-  };
+  const auto write = [&](const std::string& name, const std::string& text) { return tmp.write(name, text); };
   const auto check_square = [](const TriangleSoup& s) {
     REQUIRE(s.P.rows() == 4);
     CHECK(s.P.row(2) == Eigen::RowVector3d(1, 1, 0));

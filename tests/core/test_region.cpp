@@ -62,10 +62,7 @@ TEST_CASE("geometric predicates select the right vertices", "[core][region]") {
 
 TEST_CASE("bad selection and transform files give specific errors", "[core][region][bad-input]") {
   test::TempDir tmp;
-  auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(tmp.file(name)) << text;
-    return tmp.file(name);
-  };
+  const auto write = [&](const std::string& name, const std::string& text) { return tmp.write(name, text); };
   CHECK_THROWS_WITH(read_sel(tmp.file("missing.sel"), 3), Contains("cannot open") && Contains("missing.sel"));
   CHECK_THROWS_WITH(read_sel(write("short.sel", "0\n1\n"), 3), Contains("has 2 labels but the mesh has 3 vertices"));
   CHECK_THROWS_WITH(read_sel(write("neg.sel", "0\n-1\n2\n"), 3), Contains("line 2") && Contains("label -1"));

@@ -37,6 +37,10 @@ class FileText {
   std::string_view text_;
 };
 
+//! Longest token a text reader scans as one number: a longer run (binary data) is refused there rather
+//! than scanned to its end.
+constexpr size_t kMaxNumberLength = 400;
+
 //! text as it can be shown in a message: bytes outside printable ASCII as \xHH (a byte-order mark or
 //! binary data would otherwise be invisible or garble the terminal).
 std::string printable(std::string_view text);

@@ -442,9 +442,10 @@ class PlyReader {
       if (pos_ < text_.size() && (text_[pos_] == '\n' || text_[pos_] == '\r'))
         fail("the line ends before the item's last value (the header declares more)");
       size_t e = pos_;
-      while (e < text_.size() && e - pos_ < 400 && !std::isspace(static_cast<unsigned char>(text_[e]))) ++e;
+      while (e < text_.size() && e - pos_ < kMaxNumberLength && !std::isspace(static_cast<unsigned char>(text_[e]))) ++e;
       if (e == pos_) fail("file ends inside the data");
-      if (e - pos_ == 400) fail("a value of 400 bytes or more ('" + printable(text_.substr(pos_, 20)) + "...')");
+      if (e - pos_ == kMaxNumberLength)
+        fail("a value of " + std::to_string(kMaxNumberLength) + " bytes or more ('" + printable(text_.substr(pos_, 20)) + "...')");
       double x = 0;
       const char* first = text_.data() + pos_;
       auto [ptr, ec] = std::from_chars(first, text_.data() + e, x);

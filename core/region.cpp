@@ -129,8 +129,9 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
       ++i;
     } else {
       size_t e = i;
-      // A number is short: a run of 400 bytes (binary data) is refused there, not scanned to its end.
-      while (e < text.size() && e - i < 400 && !std::isspace(static_cast<unsigned char>(text[e])) && text[e] != '#') ++e;
+      while (e < text.size() && e - i < kMaxNumberLength && !std::isspace(static_cast<unsigned char>(text[e])) &&
+             text[e] != '#')
+        ++e;
       T value{};
       const char* first = text.data() + i + (text[i] == '+' ? 1 : 0);
       auto [ptr, ec] = std::from_chars(first, text.data() + e, value);

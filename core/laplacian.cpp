@@ -55,7 +55,7 @@ LaplaceOperator cotan_laplacian(const Positions& P, const Faces& F) {
   LaplaceOperator out;
   out.mass = Eigen::VectorXd::Zero(nv);
   std::vector<Triplet> triplets;
-  triplets.reserve(F.rows() * 9);
+  triplets.reserve(F.rows() * 12);  // four entries per corner
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const Vec3 p[3] = {P.row(F(f, 0)), P.row(F(f, 1)), P.row(F(f, 2))};
     const TriangleCotangents t = triangle_cotangents(p[0], p[1], p[2]);

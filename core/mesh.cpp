@@ -102,11 +102,8 @@ VertexNormals::VertexNormals(const Faces& F, int num_vertices) {
         cur = next;
       }
       const bool all_used = static_cast<int>(chain.size()) == n + 1;
-      if (all_used && chain.back() == chain.front()) {
-        kind_[v] = kClosedFan;
-        ring_.insert(ring_.end(), chain.begin(), chain.end() - 1);
-      } else if (all_used) {
-        kind_[v] = kOpenFan;
+      if (all_used) {  // a closed fan repeats its first neighbour at the end
+        kind_[v] = kFan;
         ring_.insert(ring_.end(), chain.begin(), chain.end());
       } else {
         kind_[v] = kFacePairs;
@@ -139,25 +136,26 @@ void VertexNormals::compute_into(const Positions& P, Store store) const {
       const int len = offsets_[v + 1] - offsets_[v];
       const double x = px[v], y = py[v], z = pz[v];
       double sx = 0, sy = 0, sz = 0;
-      auto add = [&](int i, int j) {  // (p_i − p) × (p_j − p)
-        const double ax = px[i] - x, ay = py[i] - y, az = pz[i] - z;
-        const double bx = px[j] - x, by = py[j] - y, bz = pz[j] - z;
-        sx += ay * bz - az * by;
-        sy += az * bx - ax * bz;
-        sz += ax * by - ay * bx;
-      };
-      switch (kind_[v]) {
-        case kClosedFan:
-          for (int t = 0; t < len; ++t) add(r[t], r[t + 1 == len ? 0 : t + 1]);
-          break;
-        case kOpenFan:
-          for (int t = 0; t + 1 < len; ++t) add(r[t], r[t + 1]);
-          break;
-        case kFacePairs:
-          for (int t = 0; t < len; t += 2) add(r[t], r[t + 1]);
-          break;
-        default:
-          break;
+      if (kind_[v] == kFan) {
+        // Σ_t a_t × a_{t+1} with a_t = p_{r[t]} − p: each neighbour's difference is formed once.
+        double ax = px[r[0]] - x, ay = py[r[0]] - y, az = pz[r[0]] - z;
+        for (int t = 1; t < len; ++t) {
+          const int j = r[t];
+          const double bx = px[j] - x, by = py[j] - y, bz = pz[j] - z;
+          sx += ay * bz - az * by;
+          sy += az * bx - ax * bz;
+          sz += ax * by - ay * bx;
+          ax = bx, ay = by, az = bz;
+        }
+      } else if (kind_[v] == kFacePairs) {
+        for (int t = 0; t < len; t += 2) {  // (p_i − p) × (p_j − p) per face
+          const int i = r[t], j = r[t + 1];
+          const double ax = px[i] - x, ay = py[i] - y, az = pz[i] - z;
+          const double bx = px[j] - x, by = py[j] - y, bz = pz[j] - z;
+          sx += ay * bz - az * by;
+          sy += az * bx - ax * bz;
+          sz += ax * by - ay * bx;
+        }
       }
       const double norm = std::sqrt(sx * sx + sy * sy + sz * sz);
       const double inv = norm > 0 ? 1.0 / norm : 0.0;

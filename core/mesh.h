@@ -51,8 +51,10 @@ class VertexNormals {
  private:
   template <class Store>
   void compute_into(const Positions& P, Store store) const;
-  enum Kind : unsigned char { kIsolated, kClosedFan, kOpenFan, kFacePairs };
-  std::vector<int> offsets_, ring_;  // per vertex: its ring (closed or open fan) or (j, k) pairs of its faces
+  enum Kind : unsigned char { kIsolated, kFan, kFacePairs };
+  // Per vertex: its fan of neighbours (a closed fan repeats its first at the end) or the (j, k) pairs of
+  // its faces where the one-ring is not a fan.
+  std::vector<int> offsets_, ring_;
   std::vector<unsigned char> kind_;
 };
 

@@ -64,22 +64,24 @@ void ShellDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
     frame_matrix_.middleRows<4>(4 * k) = M.transpose();
   }
   const double* f = fields_.data();
-  const long n = fields_.rows(), ncols = fields_.cols();
+  const long n = fields_.rows();
   double* o = out.data();
   const double* m = frame_matrix_.data();  // column-major (4h) x 3
   const long mrows = frame_matrix_.rows();
-  parallel_for_chunks(n, [&](long b, long e) {
+  // One pass per coordinate and chunk: handle 0's four columns are fused with the rest position (one
+  // write per output), further handles add theirs. A chunk's columns stay in L2 across the coordinates.
+  parallel_for_chunks(n, [&](long begin, long end) {
     for (int d = 0; d < 3; ++d) {
       double* od = o + d * n;
       const double* rest = f + d * n;
-      for (long i = b; i < e; ++i) od[i] = rest[i];
-      for (long c = 3; c < ncols; ++c) {
-        const double w = m[d * mrows + (c - 3)];
-        const double* col = f + c * n;
-        for (long i = b; i < e; ++i) od[i] += col[i] * w;
+      for (int k = 0; k < nh; ++k) {
+        const double* w = m + d * mrows + 4 * k;
+        const double *c0 = f + (3 + 4 * k) * n, *c1 = c0 + n, *c2 = c1 + n, *c3 = c2 + n;
+        const double* base = k == 0 ? rest : od;
+        for (long i = begin; i < end; ++i) od[i] = base[i] + c0[i] * w[0] + c1[i] * w[1] + c2[i] * w[2] + c3[i] * w[3];
       }
     }
-  }, 1 << 15);
+  }, 1 << 14);
 }
 
 void ShellDeformer::do_deform_to(const Positions& targets, Positions& out) {

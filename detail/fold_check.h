@@ -22,8 +22,9 @@ class FoldCheck {
   int count(const Positions& S_deformed, const Positions& B_deformed) const;
 
  private:
-  Faces faces_, base_faces_;
+  Faces faces_, base_faces_;                // base_faces_ and reference_ are empty when shared_
   long num_vertices_ = -1, num_base_vertices_ = -1;
+  bool shared_ = false;                     // S and B share connectivity: triangle t lies over triangle t
   Eigen::VectorXi reference_;               // per triangle of S: its base triangle
   std::vector<signed char> rest_sign_;      // sign of n_S · n_B at rest (0: not counted)
 };

@@ -236,8 +236,10 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
   for (Eigen::Index f = 0; f < Fb.rows(); ++f) first[f + 1] += first[f];
   std::vector<Sample> samples(ns);
   for (long i = 0; i < ns; ++i)
-    samples[first[face[i]]++] = Sample{
-        face[i], static_cast<int>(i), {barycentric(i, 0), barycentric(i, 1), barycentric(i, 2)}, height[i]};
+    samples[first[face[i]]++] = Sample{{Fb(face[i], 0), Fb(face[i], 1), Fb(face[i], 2)},
+                                       static_cast<int>(i),
+                                       {barycentric(i, 0), barycentric(i, 1), barycentric(i, 2)},
+                                       height[i]};
 
   samples_ = std::move(samples);
   base_faces_ = Fb;
@@ -283,9 +285,8 @@ void NormalDisplacements::reconstruct(const Positions& B_deformed, Positions& ou
     bool chunk_finite = true;
     for (long k = begin; k < end; ++k) {
       const Sample& s = samples_[k];
-      const int* corners = &base_faces_(s.face, 0);
       const Vec3 w(s.w[0], s.w[1], s.w[2]);
-      const Vec3 p = phong::interpolate(Bc, corners, w) + s.h * phong::direction(Bc, Nc, corners, w);
+      const Vec3 p = phong::interpolate(Bc, s.corner, w) + s.h * phong::direction(Bc, Nc, s.corner, w);
       ox[s.vertex] = p.x();
       oy[s.vertex] = p.y();
       oz[s.vertex] = p.z();

@@ -86,7 +86,7 @@ class NormalDisplacements : public DetailEncoding {
   // The encoding once more, sorted by base face: reconstruct() then reads B' and its normals almost
   // sequentially (the vertex order of S, e.g. of a Loop-refined mesh, scatters them).
   struct Sample {
-    int face, vertex;
+    int corner[3], vertex;  // the base triangle's corners (no lookup in Fb per frame)
     double w[3], h;
   };
   std::vector<Sample> samples_;

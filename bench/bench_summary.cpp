@@ -1,0 +1,108 @@
+// One figure of the performance summary per process, so each case reports its own peak memory:
+//   bench_summary bandwidth                   streamed GB/s (triad a = b + s·c, both cores, 3 × 512 MB)
+//   bench_summary CASE SIZE                   CASE: factorisation, shell, normal, vectors, transfer
+// Prints one line "case size vertices prepare_s frame_ms frame_min_ms peak_MB bytes_per_vertex extra" that
+// bench/run gathers into the table of the README's performance section. The scene is the bumpy plane's
+// `lift` edit; the multi-scale cases use the low-pass base at detail scale 0.3 (bench_multiscale's setting).
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bench/bench_common.h"
+#include "msdeform/core/laplacian.h"
+#include "msdeform/core/memory.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/scenes.h"
+#include "msdeform/core/solver.h"
+#include "msdeform/deformation/shell.h"
+#include "msdeform/reconstruction/multiscale.h"
+
+using namespace msd::bench;
+
+namespace {
+
+double peak_megabytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;  // kilobytes on Linux
+}
+
+// Best of 10 triads over arrays far larger than the caches, counting the three streams (no write-allocate).
+double triad_gigabytes_per_second() {
+  const long n = 64L << 20;
+  std::vector<double> a(n), b(n, 1.0), c(n, 2.0);
+  msd::parallel_for_chunks(n, [&](long i0, long i1) { std::fill(a.begin() + i0, a.begin() + i1, 0.0); });
+  double best = 1e30;
+  for (int rep = 0; rep < 10; ++rep) {
+    const auto t0 = Clock::now();
+    msd::parallel_for_chunks(n, [&](long i0, long i1) {
+      for (long i = i0; i < i1; ++i) a[i] = b[i] + 3.0 * c[i];
+    }, 1 << 20);
+    best = std::min(best, seconds_since(t0));
+  }
+  return 3.0 * sizeof(double) * n / best / 1e9;
+}
+
+void print(const char* name, const std::string& size, long vertices, double prepare, const std::vector<double>& frames,
+           const std::string& extra) {
+  const double peak = peak_megabytes();
+  std::printf("%s %s %ld %.3f %.3f %.3f %.0f %.0f %s\n", name, size.c_str(), vertices, prepare,
+              frames.empty() ? 0.0 : frames[frames.size() / 2], frames.empty() ? 0.0 : frames.front(), peak,
+              peak * 1024 * 1024 / vertices, extra.empty() ? "-" : extra.c_str());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  msd::retain_freed_memory();
+  const std::string what = argc > 1 ? argv[1] : "";
+  if (what == "bandwidth") {
+    std::printf("bandwidth %.1f\n", triad_gigabytes_per_second());
+    return 0;
+  }
+  if (argc != 3) {
+    std::fprintf(stderr, "usage: bench_summary bandwidth | bench_summary factorisation|shell|normal|vectors|transfer SIZE\n");
+    return 2;
+  }
+  const std::string size = argv[2];
+  msd::SceneOptions options;
+  options.resolution = msd::parse_resolution(size);
+  const msd::Scene scene = msd::make_scene("lift", options);
+  const long nv = static_cast<long>(scene.P.rows());
+
+  if (what == "factorisation") {  // the shell's bi-Laplacian on the free vertices
+    const msd::LaplaceOperator lap = msd::cotan_laplacian(scene.P, scene.F);
+    const auto free = scene.region.free_vertices();
+    const msd::SparseMatrix A = msd::submatrix(msd::polyharmonic_matrix(lap, 2), free, free);
+    const auto t0 = Clock::now();
+    msd::SparseSPDSolver solver;
+    solver.factor(A);
+    char extra[96];
+    std::snprintf(extra, sizeof extra, "factor_nnz=%.3g", solver.factor_nonzeros());
+    print("factorisation", size, nv, seconds_since(t0), {}, extra);
+    return 0;
+  }
+  std::unique_ptr<msd::Deformer> deformer;
+  if (what == "shell") {
+    deformer = std::make_unique<msd::ShellDeformer>();
+  } else if (what == "normal" || what == "vectors" || what == "transfer") {
+    msd::MultiscaleOptions o;
+    o.encoding.kind = msd::encoding_kind(what);
+    o.decomposition.low_pass.detail_scale = 0.3;
+    deformer = std::make_unique<msd::MultiscaleDeformer>(o);
+  } else {
+    std::fprintf(stderr, "bench_summary: unknown case '%s'\n", what.c_str());
+    return 2;
+  }
+  const auto t0 = Clock::now();
+  deformer->prepare(scene.P, scene.F, scene.region);
+  const double prepare = seconds_since(t0);
+  msd::Positions out(nv, 3);
+  const auto frames = time_frames(what == "transfer" ? 11 : 31, [&](int) { deformer->deform(scene.transforms, out); });
+  print(what.c_str(), size, nv, prepare, frames, "");
+  return 0;
+}

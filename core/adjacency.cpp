@@ -57,24 +57,26 @@ std::vector<int> boundary_vertices(const Faces& F, int num_vertices) {
   return out;
 }
 
+std::vector<int> grow_rings(const Faces& F, int num_vertices, std::vector<int> seeds, int rings) {
+  std::vector<char> inside(num_vertices, 0);
+  for (int v : seeds) inside[v] = 1;
+  const VertexAdjacency adjacency = vertex_adjacency(F, num_vertices);
+  for (int r = 0; r < rings && !seeds.empty(); ++r) {
+    std::vector<int> next;
+    for (int v : seeds)
+      for (const int* w = adjacency.begin(v); w != adjacency.end(v); ++w)
+        if (!inside[*w]) inside[*w] = 1, next.push_back(*w);
+    seeds.swap(next);
+  }
+  std::vector<int> out;
+  for (int v = 0; v < num_vertices; ++v)
+    if (inside[v]) out.push_back(v);
+  return out;
+}
+
 std::vector<int> boundary_band(const Faces& F, int num_vertices, int rings) {
   if (rings <= 0) return {};
-  std::vector<int> ring = boundary_vertices(F, num_vertices);
-  if (ring.empty()) return {};
-  std::vector<char> in_band(num_vertices, 0);
-  for (int v : ring) in_band[v] = 1;
-  const VertexAdjacency adjacency = vertex_adjacency(F, num_vertices);
-  for (int r = 1; r < rings; ++r) {
-    std::vector<int> next;
-    for (int v : ring)
-      for (const int* w = adjacency.begin(v); w != adjacency.end(v); ++w)
-        if (!in_band[*w]) in_band[*w] = 1, next.push_back(*w);
-    ring.swap(next);
-  }
-  std::vector<int> band;
-  for (int v = 0; v < num_vertices; ++v)
-    if (in_band[v]) band.push_back(v);
-  return band;
+  return grow_rings(F, num_vertices, boundary_vertices(F, num_vertices), rings - 1);
 }
 
 }  // namespace msd

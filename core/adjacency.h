@@ -25,6 +25,10 @@ VertexAdjacency vertex_adjacency(const Faces& F, int num_vertices);
 //! Vertices on a boundary edge (an edge used by exactly one face), ascending.
 std::vector<int> boundary_vertices(const Faces& F, int num_vertices);
 
+//! The seed vertices and every vertex within `rings` edges of one (rings = 0: the seeds), ascending.
+//! Seeds must be in [0, num_vertices).
+std::vector<int> grow_rings(const Faces& F, int num_vertices, std::vector<int> seeds, int rings);
+
 //! Vertices within `rings` rings of the mesh boundary, ascending: the boundary vertices for rings = 1,
 //! plus their neighbours for 2, and so on; empty for rings <= 0.
 std::vector<int> boundary_band(const Faces& F, int num_vertices, int rings);

@@ -195,9 +195,10 @@ void add_compare_command(CLI::App& app) {
       "Run every method and detail encoding on the benchmark edits; write metrics, meshes, pictures and index.html");
   struct Args {
     std::vector<std::string> methods, scenes;
-    std::string resolution = "10k", output = "compare-out", mesh, sel, def, survey, reference;
+    std::string resolution = "10k", output = "compare-out", survey, reference;
     bool no_self_intersections = false;
     DeformerOptions method;
+    EditCaseOptions mesh;  // --mesh with --sel / --def or the region and transform options
   };
   auto a = std::make_shared<Args>();
   cmd->add_option("--methods", a->methods, "Methods to run (default: all but primo, which takes minutes per edit "
@@ -210,9 +211,11 @@ void add_compare_command(CLI::App& app) {
                                          "none when --mesh is given)")
       ->delimiter(',');
   cmd->add_option("--resolution", a->resolution, "Approximate vertex count of the built-in scenes")->capture_default_str();
-  cmd->add_option("--mesh", a->mesh, "Also run a mesh file of your own (needs --sel and --def), e.g. CGAL's cactus");
-  cmd->add_option("--sel", a->sel, "Region of --mesh (.sel or .dmat)");
-  cmd->add_option("--def", a->def, "Handle transforms of --mesh (.def)");
+  cmd->add_option("--mesh", a->mesh.mesh, "Also run a mesh file of your own (with --sel and --def, or --fixed / "
+                                         "--handle and --translate / --rotate / --scale), e.g. CGAL's cactus");
+  cmd->add_option("--sel", a->mesh.sel, "Region of --mesh (.sel or .dmat)");
+  cmd->add_option("--def", a->mesh.def, "Handle transforms of --mesh (.def)");
+  a->mesh.region.add_to(*cmd);
   cmd->add_option("--survey", a->survey,
                   "Run the Botsch-Sorkine benchmark edits from this folder (with the built-in scenes only when --scenes names them) (seed Fig. 9.16): plane (translation), "
                   "cylinder (120 degree bend), bar (135 degree twist) and cactus, each NAME.off/.sel/.def");
@@ -233,6 +236,11 @@ void add_compare_command(CLI::App& app) {
     options.self_intersections = !a->no_self_intersections;
     options.progress = [](const std::string& line) { std::fprintf(stderr, "  %s\n", line.c_str()); };
     check_method_names(options.methods);  // fail fast, before any work
+    const RegionOptions& r = a->mesh.region;
+    if (a->mesh.mesh.empty() && (r.builds_region() || r.builds_transforms() || !a->mesh.sel.empty() ||
+                                 !a->mesh.def.empty() || !r.write_sel.empty() || !r.write_def.empty()))
+      throw InvalidInput("compare: --sel, --def, --fixed, --handle, the transforms and --write-sel / --write-def apply "
+                         "to a --mesh");
     options.reference = a->reference;
     if (options.reference.empty())
       for (const char* candidate : {"primo", "arap"})
@@ -241,7 +249,7 @@ void add_compare_command(CLI::App& app) {
           options.reference = candidate;
     // Build every case first, so a bad name or file fails before anything is written.
     std::vector<std::string> scenes = a->scenes;
-    if (scenes.empty() && a->mesh.empty() && a->survey.empty()) scenes = default_scenes();
+    if (scenes.empty() && a->mesh.mesh.empty() && a->survey.empty()) scenes = default_scenes();
     const int resolution = parse_resolution(a->resolution);
     {
       std::error_code ec;  // an -o that is a file fails here, not after the scenes are built
@@ -253,10 +261,7 @@ void add_compare_command(CLI::App& app) {
       std::fprintf(stderr, "building scene %s (%s vertices)\n", s.c_str(), a->resolution.c_str());
       cases.push_back(scene_case(s, resolution));
     }
-    if (!a->mesh.empty()) {
-      if (a->sel.empty() || a->def.empty()) throw InvalidInput("compare: --mesh needs --sel and --def");
-      cases.push_back(file_case(a->mesh, a->sel, a->def));
-    }
+    if (!a->mesh.mesh.empty()) cases.push_back(a->mesh.load());
     if (!a->survey.empty())
       for (const char* name : {"plane", "cylinder", "bar", "cactus"}) {
         const std::string base = (fs::path(a->survey) / name).string();

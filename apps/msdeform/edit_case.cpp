@@ -25,6 +25,7 @@ void EditCaseOptions::add_to(CLI::App& cmd) {
   cmd.add_option("--resolution", resolution, "Approximate vertex count of a built-in scene (e.g. 10k, 100k, 1M)")
       ->capture_default_str();
   cmd.add_flag("--force", force, "Let an output replace one of the input files (refused otherwise)");
+  region.add_to(cmd);
 }
 
 bool same_file(const std::string& a, const std::string& b) {
@@ -52,14 +53,50 @@ void EditCaseOptions::check_output(const std::string& output, const char* option
 }
 
 EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {
-  if (!scene.empty()) return scene_case(scene, parse_resolution(resolution));
-  if (mesh.empty()) throw InvalidInput("give a mesh file with --sel and --def, or a built-in --scene");
-  if (sel.empty() && need_region) throw InvalidInput("a mesh file needs --sel (the region)");
-  if (!sel.empty() && need_transforms) {
-    if (def.empty()) throw InvalidInput("a mesh file needs --def (the handle transforms)");
-    return file_case(mesh, sel, def);
+  for (const auto& [path, option] : {std::pair{region.write_sel, "--write-sel"}, {region.write_def, "--write-def"}}) {
+    if (path.empty()) continue;
+    check_writable(path, option);
+    for (const std::string& input : {mesh, sel, def})
+      if (!force && !input.empty() && same_file(path, input))
+        throw InvalidInput(std::string(option) + " " + path + " is one of the inputs; it would be replaced. Write "
+                           "elsewhere, or give --force");
   }
-  return load_edit_case(mesh, sel);  // the mesh, and the region when --sel is given
+  const bool built_region = region.builds_region(), built_transforms = region.builds_transforms();
+  EditCase c;
+  if (!scene.empty()) {
+    if (built_region || built_transforms)
+      throw InvalidInput("--scene brings its own region and transforms; --fixed, --handle, --translate, --rotate and "
+                         "--scale apply to a mesh file");
+    c = scene_case(scene, parse_resolution(resolution));
+  } else {
+    if (mesh.empty()) throw InvalidInput("give a mesh file with a region (--sel, or --fixed / --handle), or a built-in --scene");
+    if (!sel.empty() && built_region) throw InvalidInput("give the region by --sel or by --fixed / --handle, not both");
+    if (!def.empty() && built_transforms)
+      throw InvalidInput("give the transforms by --def or by --translate / --rotate / --scale, not both");
+    if (sel.empty() && !built_region && need_region)
+      throw InvalidInput("a mesh file needs a region: --sel FILE, or --fixed / --handle selections");
+    const bool transforms_from_file = need_transforms && (!sel.empty() || built_region) && !built_transforms;
+    if (transforms_from_file && def.empty())
+      throw InvalidInput("a mesh file needs handle transforms: --def FILE, or --translate / --rotate / --scale");
+    c = load_edit_case(mesh, sel, transforms_from_file ? def : std::string());
+    if (built_region) c.region = region.build_region(c.P, c.F);
+    if (transforms_from_file && built_region && static_cast<int>(c.transforms.size()) != c.region.num_handles())
+      throw InvalidInput(def + " has " + std::to_string(c.transforms.size()) + " matrices but --handle selected " +
+                         std::to_string(c.region.num_handles()) + " handle(s)");
+    if (built_transforms) {
+      if (c.region.num_vertices() == 0) throw InvalidInput("--translate, --rotate and --scale need a region with handles");
+      c.transforms = region.build_transforms(c.P, c.region);
+    }
+  }
+  if (!region.write_sel.empty()) {
+    if (c.region.num_vertices() == 0) throw InvalidInput("--write-sel: there is no region to write");
+    write_sel(c.region, region.write_sel);
+  }
+  if (!region.write_def.empty()) {
+    if (c.transforms.empty()) throw InvalidInput("--write-def: there are no transforms to write");
+    write_def(c.transforms, region.write_def);
+  }
+  return c;
 }
 
 }  // namespace msd::cli

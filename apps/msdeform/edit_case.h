@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "apps/msdeform/region_options.h"
 #include "msdeform/core/edit_case.h"
 
 namespace msd::cli {
@@ -16,6 +17,7 @@ bool same_file(const std::string& a, const std::string& b);
 struct EditCaseOptions {
   std::string mesh, sel, def, scene, resolution = "10k";
   bool force = false;  // --force: an output may replace an input file
+  RegionOptions region;  // --fixed, --handle, --translate, ...: the region and transforms without files
   void add_to(CLI::App& cmd);
   // Before any work: output (named by option, e.g. "-o") has a known mesh format and can be written
   // (check_writable), and is none of the inputs (the edit's files and other_inputs) unless --force.
@@ -23,9 +25,10 @@ struct EditCaseOptions {
   // and the path.
   void check_output(const std::string& output, const char* option,
                     const std::vector<std::string>& other_inputs = {}) const;
-  // Loads the files or builds the scene. Throws InvalidInput naming the file or the mismatch. Without
-  // need_transforms, --def may be omitted (transforms stay empty); without need_region, --sel too (the
-  // region stays empty).
+  // Loads the files or builds the scene, builds the region and transforms given on the command line, and
+  // writes them when --write-sel / --write-def ask. Throws InvalidInput naming the file, option or
+  // mismatch. Without need_transforms, --def may be omitted (transforms stay empty); without need_region,
+  // --sel too (the region stays empty).
   EditCase load(bool need_transforms = true, bool need_region = true) const;
 };
 

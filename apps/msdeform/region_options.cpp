@@ -1,0 +1,223 @@
+#include "apps/msdeform/region_options.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cmath>
+#include <cstdlib>
+#include <map>
+
+#include "msdeform/core/adjacency.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
+
+namespace msd::cli {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// "a,b,c" as finite numbers, as many as one of `counts`. `where` (the option and its value) and `what`
+// (the expected form) name them in errors.
+std::vector<double> numbers(const std::string& where, const std::string& text, std::vector<int> counts,
+                            const std::string& what) {
+  std::vector<double> out;
+  size_t at = 0;
+  while (true) {
+    const size_t comma = text.find(',', at);
+    const std::string item = text.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+    char* end = nullptr;
+    errno = 0;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(x) || errno == ERANGE)
+      throw InvalidInput(where + ": '" + item + "' is not a finite number (expected " + what + ")");
+    out.push_back(x);
+    if (comma == std::string::npos) break;
+    at = comma + 1;
+  }
+  for (int c : counts)
+    if (static_cast<int>(out.size()) == c) return out;
+  throw InvalidInput(where + ": " + std::to_string(out.size()) + " numbers given, expected " + what);
+}
+
+int integer(const std::string& where, double x, const char* what, long lo, long hi) {
+  if (x != std::floor(x) || x < lo || x > hi) {
+    char got[32];
+    std::snprintf(got, sizeof got, "%.17g", x);
+    throw InvalidInput(where + ": " + what + " must be an integer in [" + std::to_string(lo) + ", " +
+                       std::to_string(hi) + "], got " + got);
+  }
+  return static_cast<int>(x);
+}
+
+Vec3 vec(const std::vector<double>& v, size_t at = 0) { return Vec3(v[at], v[at + 1], v[at + 2]); }
+
+// The vertices a --fixed or --handle SPEC selects (see region_options.h).
+std::vector<int> select(const std::string& option, const std::string& spec, const Positions& P, const Faces& F,
+                        bool handle) {
+  const size_t colon = spec.find(':');
+  const std::string kind = spec.substr(0, colon), args = colon == std::string::npos ? "" : spec.substr(colon + 1);
+  const int nv = static_cast<int>(P.rows());
+  const std::string where = option + " " + spec;
+  if (kind == "box") {
+    const auto v = numbers(where, args, {6}, "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX");
+    return select_box(P, vec(v), vec(v, 3));
+  }
+  if (kind == "sphere") {
+    const auto v = numbers(where, args, {4}, "X,Y,Z,R");
+    return select_sphere(P, vec(v), v[3]);
+  }
+  if (kind == "halfspace") {
+    const auto v = numbers(where, args, {4}, "NX,NY,NZ,D: the vertices with n·p < d");
+    const Vec3 n = vec(v);
+    if (n.squaredNorm() == 0) throw InvalidInput(where + ": the normal is zero");
+    std::vector<int> out;
+    for (int i = 0; i < nv; ++i)
+      if (n.dot(P.row(i).transpose()) < v[3]) out.push_back(i);
+    return out;
+  }
+  if (kind == "vertex") {
+    const auto v = numbers(where, args, {2}, "ID,RINGS");
+    const int id = integer(where, v[0], "the vertex id", 0, nv - 1);
+    const int rings = integer(where, v[1], "the number of rings", 0, 1000000);
+    return grow_rings(F, nv, {id}, rings);
+  }
+  if (kind == "file") {
+    const size_t comma = args.rfind(',');
+    std::string path = args;
+    bool by_value = false;
+    long value = 0;
+    if (comma != std::string::npos) {  // file:PATH,VALUE (a path may hold commas: only a number counts)
+      char* end = nullptr;
+      const std::string tail = args.substr(comma + 1);
+      const long x = std::strtol(tail.c_str(), &end, 10);
+      if (!tail.empty() && *end == '\0') path = args.substr(0, comma), value = x, by_value = true;
+    }
+    if (path.empty()) throw InvalidInput(where + ": no file given (file:PATH or file:PATH,VALUE)");
+    const bool dmat = file_extension(path) == ".dmat";
+    if (dmat && !by_value)
+      throw InvalidInput(where + ": a .dmat file holds groups, not fixed and handle vertices: give the group, e.g. "
+                         "file:" + path + ",0");
+    const Region r = dmat ? read_dmat_groups(path, nv) : read_sel(path, nv);
+    std::vector<int> out;
+    for (int i = 0; i < nv; ++i) {
+      const int code = r.code(i);
+      const long file_value = dmat ? (code == Region::kFree ? -1 : code - Region::kFirstHandle) : code;
+      if (by_value ? file_value == value : handle ? code >= Region::kFirstHandle : code == Region::kFixed)
+        out.push_back(i);
+    }
+    return out;
+  }
+  throw InvalidInput(where + ": unknown selection '" + kind +
+                     "' (box:, sphere:, halfspace:, vertex: or file:; see msdeform deform --help)");
+}
+
+}  // namespace
+
+void RegionOptions::add_to(CLI::App& cmd) {
+  auto* g = cmd.add_option_group("region", "Regions and transforms without files (instead of --sel / --def)");
+  group_ = g;
+  auto add = [&](const char* name, std::vector<std::string>& values, const char* type, const char* help) {
+    return g->add_option(name, values, help)->type_name(type)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  };
+  fixed_ = add("--fixed", fixed_values_, "SPEC",
+               "Fixed vertices: box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX | sphere:X,Y,Z,R | halfspace:NX,NY,NZ,D (n.p < d) | "
+               "vertex:ID,RINGS | file:PATH[,VALUE]; repeatable, later selections win");
+  handle_ = add("--handle", handle_values_, "SPEC", "The next handle, selected like --fixed; repeat for several handles");
+  translate_ = add("--translate", translate_values_, "X,Y,Z",
+                   "Translate the handle this follows (before any --handle: every handle)");
+  rotate_ = add("--rotate", rotate_values_, "AX,AY,AZ,DEG", "Rotate by DEG degrees about the axis, like --translate");
+  scale_ = add("--scale", scale_values_, "S|SX,SY,SZ", "Scale, like --translate");
+  about_ = add("--about", about_values_, "X,Y,Z|handle-centroid",
+               "Centre of the rotations and scales that follow (default: the handle's centroid, moved by the transforms before)");
+  g->add_option("--write-sel", write_sel, "Save the region (built or loaded) as a .sel file");
+  g->add_option("--write-def", write_def, "Save the handle transforms (built or loaded) as a .def file");
+}
+
+bool RegionOptions::builds_region() const { return fixed_ && (fixed_->count() > 0 || handle_->count() > 0); }
+
+bool RegionOptions::builds_transforms() const {
+  return translate_ && (translate_->count() > 0 || rotate_->count() > 0 || scale_->count() > 0);
+}
+
+std::vector<RegionOptions::Step> RegionOptions::steps() const {
+  std::vector<Step> out;
+  if (!group_) return out;
+  std::map<const CLI::Option*, size_t> used;
+  for (const CLI::Option* o : group_->parse_order())
+    if (o == fixed_ || o == handle_ || o == translate_ || o == rotate_ || o == scale_ || o == about_)
+      out.push_back({o, o->results().at(used[o]++)});
+  return out;
+}
+
+Region RegionOptions::build_region(const Positions& P, const Faces& F) const {
+  Region region(static_cast<int>(P.rows()), Region::kFree);
+  int handles = 0;
+  for (const Step& s : steps()) {
+    if (s.option != fixed_ && s.option != handle_) continue;
+    const bool handle = s.option == handle_;
+    const std::string option = handle ? "--handle" : "--fixed";
+    const std::vector<int> vertices = select(option, s.value, P, F, handle);
+    if (vertices.empty())
+      throw InvalidInput(option + " " + s.value + " selects no vertex" +
+                         (handle ? " (handle " + std::to_string(handles) + ")" : std::string()));
+    if (handle)
+      region.set_handle(vertices, handles++);
+    else
+      region.set_fixed(vertices);
+  }
+  for (int k = 0; k < handles; ++k)
+    if (region.handle_vertices(k).empty())
+      throw InvalidInput("--handle number " + std::to_string(k + 1) + " lost all its vertices to later selections");
+  return region;
+}
+
+std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Region& region) const {
+  const int nh = region.num_handles();
+  std::vector<Mat4> T(nh, Mat4::Identity());
+  std::vector<Vec3> centroid(nh, Vec3::Zero());
+  for (int k = 0; k < nh; ++k) {
+    const std::vector<int> vertices = region.handle_vertices(k);
+    for (int v : vertices) centroid[k] += P.row(v).transpose();
+    if (!vertices.empty()) centroid[k] /= static_cast<double>(vertices.size());
+  }
+  int current = -1;  // the handle the next transforms move; -1: all of them
+  bool has_about = false;
+  Vec3 about = Vec3::Zero();
+  for (const Step& s : steps()) {
+    if (s.option == fixed_) continue;
+    if (s.option == handle_) {
+      ++current, has_about = false;
+      continue;
+    }
+    const std::string option = s.option->get_name() + " " + s.value;
+    if (s.option == about_) {
+      has_about = s.value != "handle-centroid";
+      if (has_about) about = vec(numbers(option, s.value, {3}, "X,Y,Z or handle-centroid"));
+      continue;
+    }
+    if (current >= nh)
+      throw InvalidInput(option + " follows handle " + std::to_string(current) +
+                         ", which the region does not have (" + std::to_string(nh) + " handle(s))");
+    Mat4 M = Mat4::Identity();
+    if (s.option == translate_) {
+      M.topRightCorner<3, 1>() = vec(numbers(option, s.value, {3}, "X,Y,Z"));
+    } else if (s.option == rotate_) {
+      const auto v = numbers(option, s.value, {4}, "AX,AY,AZ,DEGREES");
+      if (vec(v).squaredNorm() == 0) throw InvalidInput(option + ": the axis is zero");
+      M.topLeftCorner<3, 3>() = Eigen::AngleAxisd(v[3] * kPi / 180, vec(v).normalized()).toRotationMatrix();
+    } else {
+      const auto v = numbers(option, s.value, {1, 3}, "S or SX,SY,SZ");
+      const Vec3 factors = v.size() == 1 ? Vec3::Constant(v[0]) : vec(v);
+      if (!(factors.array().abs() > 0).all()) throw InvalidInput(option + ": a scale factor is zero");
+      M.topLeftCorner<3, 3>() = factors.asDiagonal();
+    }
+    for (int k = (current < 0 ? 0 : current); k < (current < 0 ? nh : current + 1); ++k) {
+      const Vec3 c = has_about ? about : transform_point(T[k], centroid[k]);  // where the handle is now
+      Mat4 about_c = M;  // M about c: x ↦ c + A (x − c) + t
+      about_c.topRightCorner<3, 1>() += c - M.topLeftCorner<3, 3>() * c;
+      T[k] = about_c * T[k];
+    }
+  }
+  return T;
+}
+
+}  // namespace msd::cli

@@ -1,0 +1,103 @@
+#!/usr/bin/env bash
+# Regions and transforms on the command line (ctest test cli_regions; issue 16, part 2): the knight's
+# libigl edit and a y-up armadillo edit as one command each, without hand-written files; --write-sel /
+# --write-def reproduce the same deformation through files; transforms compose in order, about the
+# handle's rest centroid; bad specs are refused by name.
+# Usage: check_regions.sh MSDEFORM WORK_DIR SHARED_DATA CGAL_MESHES
+set -uo pipefail
+msdeform="$1"
+work="$2"
+shared="$3"
+cgal="$4"
+rm -rf "$work"
+mkdir -p "$work"
+cd "$work" || exit 1
+fail() { echo "check_regions: FAILED: $*" >&2; exit 1; }
+expect_error() {
+  local text="$1"
+  shift
+  "$@" >out.txt 2>err.txt
+  local got=$?
+  [ "$got" = 1 ] || { cat err.txt; fail "'$*' exited $got, expected 1"; }
+  grep -qF -- "$text" err.txt || { cat err.txt; fail "'$*' did not say: $text"; }
+}
+"$msdeform" scene lift --resolution 2k -o . >/dev/null || fail "scene lift"
+
+# The same edit built on the command line and read back from the files it wrote gives the same mesh.
+"$msdeform" deform lift.off --fixed halfspace:1,0,0,0.2 --handle box:0.7,-1,-1,2,2,2 --translate 0,0,0.3 \
+  --rotate 0,1,0,-20 --method shell -o built.off --write-sel built.sel --write-def built.def >/dev/null ||
+  fail "deform with --fixed/--handle"
+"$msdeform" deform lift.off --sel built.sel --def built.def --method shell -o from-files.off >/dev/null ||
+  fail "deform from the written files"
+cmp -s built.off from-files.off || fail "the written .sel/.def do not reproduce the edit"
+grep -c "^0$" built.sel >/dev/null || fail "no fixed vertex written"
+/usr/bin/python3 - built.off lift.off built.sel built.def <<'EOF' || fail "transforms are not composed about the handle centroid"
+import sys
+def off(path):
+    w = open(path).read().split()
+    nv = int(w[1])
+    return [tuple(map(float, w[4 + 3 * i:7 + 3 * i])) for i in range(nv)]
+out, rest = off(sys.argv[1]), off(sys.argv[2])
+codes = [int(t) for t in open(sys.argv[3]).read().split('\n') if t and not t.startswith('#')]
+T = [float(t) for line in open(sys.argv[4]) if not line.startswith('#') for t in line.split()]
+handle = [v for v, c in enumerate(codes) if c == 2]
+c = [sum(rest[v][d] for v in handle) / len(handle) for d in range(3)]
+# the rotation is about the centroid where the translation put it: the centroid moves by exactly (0, 0, 0.3)
+moved = [sum(T[4 * r + k] * c[k] for k in range(3)) + T[4 * r + 3] for r in range(3)]
+assert all(abs(moved[d] - c[d] - (0, 0, 0.3)[d]) < 1e-12 for d in range(3)), (moved, c)
+# handle vertices reach T p, fixed ones stay
+for v in handle:
+    target = [sum(T[4 * r + k] * rest[v][k] for k in range(3)) + T[4 * r + 3] for r in range(3)]
+    assert max(abs(out[v][d] - target[d]) for d in range(3)) < 1e-9
+assert all(out[v] == rest[v] for v, code in enumerate(codes) if code == 0)
+EOF
+
+# A transform before any --handle moves every handle; after --handle k only handle k.
+"$msdeform" deform lift.off --translate 0,0,1 --handle vertex:0,1 --handle vertex:10,1 --translate 1,0,0 \
+  --method shell -o two.off --write-def two.def >/dev/null || fail "two handles"
+expected=$'1 0 0 0\n0 1 0 0\n0 0 1 1\n0 0 0 1\n1 0 0 1\n0 1 0 0\n0 0 1 1\n0 0 0 1'
+[ "$(grep -v '^#' two.def)" = "$expected" ] || { cat two.def; fail "transform scopes"; }
+
+# Real meshes, one command each: libigl's knight with its .dmat groups (group 0 fixed, 1 and 2 handles),
+# CGAL's y-up armadillo with its feet fixed and both hands moved.
+if [ -f "$shared/decimated-knight.off" ]; then
+  groups="$shared/decimated-knight-selection.dmat"
+  "$msdeform" deform "$shared/decimated-knight.off" --fixed "file:$groups,0" --handle "file:$groups,1" \
+    --rotate 0,1,0,30 --handle "file:$groups,2" --translate 0,0.1,0 --method arap -o knight.off \
+    --write-sel knight.sel >out.txt 2>&1 || { cat out.txt; fail "knight"; }
+  [ "$(grep -c '^0$' knight.sel) $(grep -c '^2$' knight.sel) $(grep -c '^3$' knight.sel)" = "21 27 25" ] ||
+    fail "knight groups were not mapped to fixed and handles"
+  grep -q "handle error 0\|handle error [0-9.]*e-1[0-9]" out.txt || { cat out.txt; fail "knight handles missed"; }
+  "$msdeform" compare --mesh "$shared/decimated-knight.off" --fixed "file:$groups,0" --handle "file:$groups,1" \
+    --rotate 0,1,0,30 --handle "file:$groups,2" --translate 0,0.1,0 --methods shell,arap -o knight-cmp \
+    >out.txt 2>&1 || { cat out.txt; fail "compare --mesh with --fixed/--handle"; }
+  grep -q "(2 results, 0 failed)" out.txt || { cat out.txt; fail "knight comparison"; }
+else
+  echo "check_regions: $shared/decimated-knight.off missing: knight skipped"
+fi
+if [ -f "$cgal/armadillo.off" ]; then
+  "$msdeform" deform "$cgal/armadillo.off" --fixed halfspace:0,1,0,-40 --handle sphere:63.5,71.7,-32.6,15 \
+    --rotate 0,0,1,40 --about 20,60,-20 --handle sphere:-63.5,60.8,-21.7,15 --translate 0,20,0 --method shell \
+    -o armadillo.off --write-sel armadillo.sel >out.txt 2>&1 || { cat out.txt; fail "armadillo"; }
+  [ "$(grep -c '^0$' armadillo.sel)" -gt 1000 ] || fail "armadillo: the feet were not fixed"
+  grep -q "2 handle(s)" out.txt || { cat out.txt; fail "armadillo: two handles expected"; }
+else
+  echo "check_regions: $cgal/armadillo.off missing: armadillo skipped"
+fi
+
+# Bad specs are refused by name, before any work.
+expect_error "--handle sphere:1,2,3: 3 numbers given, expected X,Y,Z,R" \
+  "$msdeform" deform lift.off --handle sphere:1,2,3 --translate 0,0,1 -o x.off
+expect_error "selects no vertex" "$msdeform" deform lift.off --handle sphere:9,9,9,0.01 --translate 0,0,1 -o x.off
+expect_error "the vertex id must be an integer in [0," \
+  "$msdeform" deform lift.off --handle vertex:99999999,1 --translate 0,0,1 -o x.off
+expect_error "unknown selection 'cube'" "$msdeform" deform lift.off --handle cube:1 --translate 0,0,1 -o x.off
+expect_error "--rotate 0,0,0,30: the axis is zero" "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,0,0,30 -o x.off
+expect_error "'nan' is not a finite number" "$msdeform" deform lift.off --handle vertex:0,1 --translate nan,0,0 -o x.off
+expect_error "not both" "$msdeform" deform lift.off --sel lift.sel --handle vertex:0,1 --translate 0,0,1 -o x.off
+expect_error "not both" "$msdeform" deform lift.off --sel lift.sel --def lift.def --translate 0,0,1 -o x.off
+expect_error "needs handle transforms" "$msdeform" deform lift.off --handle vertex:0,1 -o x.off
+expect_error "give the group" "$msdeform" deform lift.off --handle file:groups.dmat --translate 0,0,1 -o x.off
+expect_error "is one of the inputs" "$msdeform" deform lift.off --sel lift.sel --def lift.def --write-sel lift.sel -o x.off
+[ -e x.off ] && fail "a refused run wrote its output"
+echo "check_regions: all passed"

@@ -1,5 +1,6 @@
 #include "msdeform/analysis/render.h"
 
+#include <Eigen/Eigenvalues>
 #include <embree3/rtcore.h>
 #include <stb/stb_image_write.h>  // declarations only: libstb holds the implementation
 
@@ -263,6 +264,12 @@ void check_options(const RenderOptions& o, const Positions& P) {
   if (!std::isfinite(o.point_radius) || o.point_radius < 0)
     fail("point_radius = " + std::to_string(o.point_radius) +
          " must be finite and non-negative (0: automatic)");
+  if (o.vertex_colors) {
+    const Positions& c = *o.vertex_colors;
+    if (c.rows() != P.rows())
+      fail("vertex_colors has " + std::to_string(c.rows()) + " rows for " + std::to_string(P.rows()) + " vertices");
+    if (!c.allFinite()) fail("vertex_colors is not finite");
+  }
   if (o.vertex_scalar) {
     const Eigen::VectorXd& s = *o.vertex_scalar;
     if (s.size() != P.rows())
@@ -417,6 +424,7 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
   const double shadow_offset = 1e-4 * radius;
   const Vec3 base = to_linear(o.base_color);
   const Eigen::VectorXd* scalar = o.vertex_scalar;
+  const Positions* colors = o.vertex_colors;
   auto albedo_of = [&](double s) { return to_linear(viridis((s - legend.lo) / (legend.hi - legend.lo))); };
 
   // Lambert from the head and key lights at point (shading normal n, geometric normal ng, both unit and
@@ -449,7 +457,9 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
     Vec3 n = (w0 * N.row(a) + u * N.row(b) + v * N.row(c)).transpose();
     n = n.norm() > 1e-12 ? n.normalized() : ng;
     if (n.dot(ng) < 0) n = -n;
-    const Vec3 albedo = scalar ? albedo_of(w0 * (*scalar)[a] + u * (*scalar)[b] + v * (*scalar)[c]) : base;
+    const Vec3 albedo = scalar   ? albedo_of(w0 * (*scalar)[a] + u * (*scalar)[b] + v * (*scalar)[c])
+                        : colors ? to_linear((w0 * colors->row(a) + u * colors->row(b) + v * colors->row(c)).transpose())
+                                 : base;
     return light(w0 * pa + u * pb + v * pc, n, ng, view, albedo);
   };
 
@@ -460,7 +470,7 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
     Vec3 n = hit.normal.norm() > 0 ? hit.normal.normalized() : view;
     if (n.dot(view) < 0) n = -n;
     const Vec3 centre_i = Pc.row(i).transpose();
-    const Vec3 albedo = scalar ? albedo_of((*scalar)[i]) : base;
+    const Vec3 albedo = scalar ? albedo_of((*scalar)[i]) : colors ? to_linear(colors->row(i).transpose()) : base;
     return light(centre_i + point_radius * n, n, n, view, albedo);
   };
 
@@ -584,6 +594,81 @@ Image tile_images(const std::vector<Image>& tiles, int columns, const std::vecto
                 kTextColour, scale);
   }
   return sheet;
+}
+
+Vec3 ViewAxes::direction(double azimuth_degrees, double elevation_degrees) const {
+  const double kDegree = 3.14159265358979323846 / 180;
+  const double az = azimuth_degrees * kDegree, el = elevation_degrees * kDegree;
+  return std::cos(el) * (-std::cos(az) * front - std::sin(az) * side) + std::sin(el) * up;
+}
+
+namespace {
+// The coordinate axis (positive) nearest to direction d.
+Vec3 nearest_axis(const Vec3& d) {
+  Eigen::Index k;
+  d.cwiseAbs().maxCoeff(&k);
+  return Vec3::Unit(k);
+}
+}  // namespace
+
+ViewAxes view_axes(const Positions& P, const Vec3& up) {
+  if (P.rows() == 0) throw InvalidInput("view_axes: no vertices");
+  if (!P.allFinite()) throw InvalidInput("view_axes: a coordinate is not finite");
+  if (!(up.squaredNorm() > 0) || !up.allFinite()) throw InvalidInput("view_axes: the up direction is zero or not finite");
+  ViewAxes axes;
+  axes.up = up.normalized();
+  // front: the coordinate axis across up (the two least aligned with it) along which P is thinner.
+  const Vec3 extent = P.colwise().maxCoeff() - P.colwise().minCoeff();
+  Eigen::Index k;
+  axes.up.cwiseAbs().maxCoeff(&k);
+  const int a = (k + 1) % 3, b = (k + 2) % 3;
+  const int thin = extent[a] < extent[b] ? a : b;
+  Vec3 front = Vec3::Unit(thin);
+  front = (front - front.dot(axes.up) * axes.up).normalized();  // exactly across up when up is not an axis
+  axes.front = front;
+  axes.side = front.cross(axes.up);
+  return axes;
+}
+
+namespace {
+// The principal axis P stands along (the longest), or for a flat shape the one it is seen along (the
+// thinnest: below 0.15 of the middle extent); `flat` says which.
+Vec3 principal_up(const Positions& P, bool& flat) {
+  const Eigen::RowVector3d mean = P.colwise().mean();
+  const Eigen::MatrixX3d centred = P.rowwise() - mean;
+  const Eigen::SelfAdjointEigenSolver<Mat3> pca(centred.transpose() * centred);
+  const Mat3 axes = pca.eigenvectors();
+  Vec3 extent;
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::VectorXd t = centred * axes.col(i);
+    extent[i] = t.maxCoeff() - t.minCoeff();
+  }
+  int order[3] = {0, 1, 2};  // by extent (the eigenvalues order the variances, not the extents)
+  std::sort(order, order + 3, [&](int i, int j) { return extent[i] < extent[j]; });
+  flat = extent[order[0]] < 0.15 * extent[order[1]];
+  return axes.col(flat ? order[0] : order[2]);
+}
+}  // namespace
+
+ViewAxes view_axes(const Positions& P) { return edit_view_axes(P, {}); }
+
+ViewAxes edit_view_axes(const Positions& P, const std::vector<int>& fixed_vertices) {
+  if (P.rows() == 0) throw InvalidInput("view_axes: no vertices");
+  if (!P.allFinite()) throw InvalidInput("view_axes: a coordinate is not finite");
+  bool flat = false;
+  const Vec3 principal = principal_up(P, flat);
+  if (!flat && !fixed_vertices.empty()) {
+    Vec3 fixed = Vec3::Zero();
+    for (int v : fixed_vertices) fixed += P.row(v).transpose();
+    fixed /= static_cast<double>(fixed_vertices.size());
+    const Vec3 away = Vec3(P.colwise().mean().transpose()) - fixed;
+    if (away.norm() > 0.1 * bounding_box_diagonal(P)) {
+      Eigen::Index k;
+      away.cwiseAbs().maxCoeff(&k);
+      return view_axes(P, away[k] > 0 ? Vec3(Vec3::Unit(k)) : Vec3(-Vec3::Unit(k)));
+    }
+  }
+  return view_axes(P, nearest_axis(principal));
 }
 
 }  // namespace msd

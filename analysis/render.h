@@ -61,6 +61,9 @@ struct RenderOptions {
   //! #V values to colour the surface with (viridis, interpolated at the hit point; one colour per sphere
   //! of a point cloud); null for base_color.
   const Eigen::VectorXd* vertex_scalar = nullptr;
+  //! #V by 3 sRGB colours in [0, 1], interpolated over the faces, when there is no vertex_scalar (e.g. the
+  //! roles of a region: fixed, free, each handle); null for base_color.
+  const Positions* vertex_colors = nullptr;
   std::string scalar_label;  //!< title of the legend
   //! Colour-map range; when equal, robust_scalar_range(*vertex_scalar) is used.
   double scalar_min = 0, scalar_max = 0;
@@ -71,6 +74,29 @@ struct RenderOptions {
   //! wherever no sample hit the mesh).
   Vec3 background_top = Vec3(0.63, 0.71, 0.81), background_bottom = Vec3(0.93, 0.95, 0.97);
 };
+
+//! Camera axes that show a shape upright. view_axes(P) takes them from the principal axes of the
+//! vertices (P #V×3): a flat shape (thinnest principal extent below 0.15 of the middle one, e.g. a
+//! terrain or the bumpy plane) is seen from above its thinnest axis, anything else stands along its
+//! longest (a figure such as the y-up armadillo); each axis is snapped to the nearest coordinate axis, the
+//! positive one (meshes are mostly authored so). `front` is the remaining coordinate axis of smaller
+//! extent, so the camera faces the broad side. For the z-up bumpy plane this gives RenderOptions's default.
+struct ViewAxes {
+  Vec3 up = Vec3::UnitZ(), front = Vec3::UnitY(), side = Vec3::UnitX();  //!< side = front × up
+  //! The direction towards the camera at azimuth degrees about up (0: from −front; positive turns towards
+  //! −side) and elevation degrees above the horizon. (31, 34.4) is the default −0.6 side − front + 0.8 up.
+  Vec3 direction(double azimuth_degrees, double elevation_degrees) const;
+  Vec3 default_direction() const { return -0.6 * side - front + 0.8 * up; }
+};
+//! 	hrow InvalidInput for no vertices or a non-finite coordinate.
+ViewAxes view_axes(const Positions& P);
+//! The same with up given (any non-zero vector; front and side from the extents across it).
+ViewAxes view_axes(const Positions& P, const Vec3& up);
+//! For an edit: a shape that is not flat and whose fixed vertices (indices into P) sit to one side, as
+//! feet or a base do (their centroid more than a tenth of the bounding-box diagonal from the vertices'
+//! centroid), stands on them: up is the signed coordinate axis nearest the direction from them to the
+//! shape. Otherwise view_axes(P).
+ViewAxes edit_view_axes(const Positions& P, const std::vector<int>& fixed_vertices);
 
 //! Ray-traces (P #V×3, F #F×3) into an image of options.width × options.height pixels: a pinhole camera
 //! on view_direction, placed by options.framing so the whole mesh is visible. Any triangle list is drawn

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "apps/compare/runner.h"
+#include "apps/msdeform/camera_options.h"
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/deformers.h"
 #include "apps/msdeform/edit_case.h"
@@ -199,6 +200,7 @@ void add_compare_command(CLI::App& app) {
     bool no_self_intersections = false;
     DeformerOptions method;
     EditCaseOptions mesh;  // --mesh with --sel / --def or the region and transform options
+    CameraOptions camera;
   };
   auto a = std::make_shared<Args>();
   cmd->add_option("--methods", a->methods, "Methods to run (default: all but primo, which takes minutes per edit "
@@ -216,6 +218,7 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("--sel", a->mesh.sel, "Region of --mesh (.sel or .dmat)");
   cmd->add_option("--def", a->mesh.def, "Handle transforms of --mesh (.def)");
   a->mesh.region.add_to(*cmd);
+  a->camera.add_to(*cmd);
   cmd->add_option("--survey", a->survey,
                   "Run the Botsch-Sorkine benchmark edits from this folder (with the built-in scenes only when --scenes names them) (seed Fig. 9.16): plane (translation), "
                   "cylinder (120 degree bend), bar (135 degree twist) and cactus, each NAME.off/.sel/.def");
@@ -295,6 +298,7 @@ void add_compare_command(CLI::App& app) {
       view.height = 480;
       view.framing = Framing::BoundingSphere;
       framing_sphere(rest, results, view.sphere_center, view.sphere_radius);
+      a->camera.apply(rest, c.region, view);  // up and view direction; --focus handle frames the handles
       const bool point_cloud = F.rows() == 0;
       if (point_cloud) view.point_radius = default_point_radius(rest);  // the rest's spacing in every picture
       // Colour by detail change where it was measured (#V values; empty when not measured).

@@ -2,10 +2,12 @@
 #include <cstdio>
 #include <memory>
 
+#include "apps/msdeform/camera_options.h"
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/deformers.h"
 #include "apps/msdeform/edit_case.h"
 #include "msdeform/analysis/metrics.h"
+#include "msdeform/core/atomic_file.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/deformation/space_deformer.h"
@@ -45,6 +47,10 @@ void add_deform_command(CLI::App& app) {
   CLI::Option* weld_option = cmd->add_option("--weld", *weld,
                   "Weld vertices within EPS (mesh units; 0: identical coordinates) before deforming, so a mesh split "
                   "along seams deforms as one surface; the output keeps the file's vertices and faces");
+  auto render_output = std::make_shared<std::string>();
+  auto camera = std::make_shared<CameraOptions>();
+  cmd->add_option("--render", *render_output, "Also draw the result to this PNG, coloured by the region's roles");
+  camera->add_to(*cmd);
   auto controls_output = std::make_shared<std::string>();
   cmd->add_option("--controls-output", *controls_output,
                   "lattice, cage-mvc, cage-harmonic: also write the deformed control points (the lattice's as a point "
@@ -56,6 +62,11 @@ void add_deform_command(CLI::App& app) {
     if (!controls_output->empty()) {
       edit->check_output(*controls_output, "--controls-output", {method->cage_file});
       if (same_file(*controls_output, *output)) throw InvalidInput("--controls-output and -o name the same file");
+    }
+    if (!render_output->empty()) {
+      if (file_extension(*render_output) != ".png")
+        throw InvalidInput("--render " + *render_output + ": the picture is a .png");
+      check_writable(*render_output, "--render");
     }
     const EditCase c = welding ? weld_case(edit->load(), *weld) : edit->load();
     if (c.weld)
@@ -91,6 +102,14 @@ void add_deform_command(CLI::App& app) {
       save_mesh(c.weld->unweld(out), c.file_F, *output);  // the file's vertices and faces
     else
       save_mesh(out, c.F, *output);
+    if (!render_output->empty()) {
+      RenderOptions view;
+      camera->apply(rest, c.region, view);  // the rest shape's axes, so a deformed figure keeps its up
+      const Positions colors = region_colors(c.region);
+      view.vertex_colors = &colors;
+      render_png(out, c.F, *render_output, view);
+      std::printf("  drew the result to %s\n", render_output->c_str());
+    }
     if (!controls_output->empty()) {
       save_mesh(space->control_points() + space->coefficients(), space->control_faces(), *controls_output);
       std::printf("  wrote the deformed control points (%d) to %s\n", space->num_coefficients(), controls_output->c_str());

@@ -10,5 +10,6 @@ void add_scene_command(CLI::App& app);
 void add_deform_command(CLI::App& app);
 void add_decompose_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
+void add_render_command(CLI::App& app);
 
 }  // namespace msd::cli

@@ -458,3 +458,79 @@ TEST_CASE("render: pictures of the test meshes", "[.look]") {
   for (Eigen::Index f = 0; f < mixed.rows(); f += 3) std::swap(mixed(f, 1), mixed(f, 2));
   render_png(positions(knight), mixed, out + "/knight-mixed-winding.png", y_up);
 }
+
+TEST_CASE("view axes: a flat shape is seen from above, others stand along their longest axis or on their fixed part",
+          "[analysis][render][view]") {
+  const Scene flat = plane(2000);  // the unit square in z = 0 with bumps
+  const ViewAxes z_up = view_axes(flat.P);
+  CHECK(z_up.up == Vec3::UnitZ());
+  CHECK(z_up.default_direction().isApprox(RenderOptions().view_direction));  // the old default, unchanged
+  CHECK(z_up.direction(31.0, 34.4).normalized().isApprox(RenderOptions().view_direction.normalized(), 2e-3));
+  CHECK(z_up.side.isApprox(z_up.front.cross(z_up.up)));
+
+  // The same plane turned to stand in y: still seen along its normal.
+  Positions turned(flat.P.rows(), 3);
+  turned << flat.P.col(0), flat.P.col(2), flat.P.col(1);
+  CHECK(view_axes(turned).up == Vec3::UnitY());
+
+  // The bumpy bar (a tube along x) stands along x; lying with its fixed end at x = 0, it stands on it...
+  SceneOptions o;
+  o.resolution = 3000;
+  const Scene bar = make_surface(SceneShape::Bar, o);
+  CHECK(view_axes(bar.P).up == Vec3::UnitX());
+  // ... but fixed along its underside (z < -0.13 over the whole length) it lies on it: +z is up.
+  std::vector<int> below;
+  for (int v = 0; v < bar.P.rows(); ++v)
+    if (bar.P(v, 2) < -0.13) below.push_back(v);
+  REQUIRE(!below.empty());
+  CHECK(edit_view_axes(bar.P, below).up == Vec3::UnitZ());
+  // A fixed part around the middle gives no direction: the principal axes decide.
+  std::vector<int> all(bar.P.rows());
+  for (int v = 0; v < bar.P.rows(); ++v) all[v] = v;
+  CHECK(edit_view_axes(bar.P, all).up == view_axes(bar.P).up);
+  // A flat sheet is seen from above even when fixed at one side (the survey's plane edit).
+  std::vector<int> side;
+  for (int v = 0; v < flat.P.rows(); ++v)
+    if (flat.P(v, 0) < 0.2) side.push_back(v);
+  CHECK(edit_view_axes(flat.P, side).up == Vec3::UnitZ());
+  CHECK_THROWS_AS(view_axes(Positions()), InvalidInput);
+  CHECK_THROWS_AS(view_axes(flat.P, Vec3::Zero()), InvalidInput);
+}
+
+TEST_CASE("view axes: CGAL's y-up armadillo stands upright, feet at the bottom of the picture",
+          "[analysis][render][view]") {
+  const TriangleSoup armadillo = load_soup(test::cgal_mesh("armadillo.off"));
+  const Positions& P = armadillo.P;
+  const Faces& F = armadillo.F;
+  // Feet: below y = -40 (y runs from -54 to 97). Coloured blue, everything else clay.
+  std::vector<int> feet;
+  Positions colors(P.rows(), 3);
+  for (int v = 0; v < P.rows(); ++v) {
+    const bool foot = P(v, 1) < -40;
+    if (foot) feet.push_back(v);
+    colors.row(v) = foot ? Eigen::RowVector3d(0, 0, 1) : Eigen::RowVector3d(1, 0.6, 0.3);
+  }
+  for (const std::vector<int>& fixed : {std::vector<int>(), feet}) {
+    const ViewAxes axes = edit_view_axes(P, fixed);
+    CHECK(axes.up == Vec3::UnitY());
+    RenderOptions o;
+    o.width = 200;
+    o.height = 200;
+    o.up = axes.up;
+    o.view_direction = axes.default_direction();
+    o.vertex_colors = &colors;
+    o.shadows = false;
+    const Image image = render(P, F, o);
+    // Mean picture row of the blue (foot) pixels and of the clay (body) pixels: the feet lie lower.
+    double foot_rows = 0, body_rows = 0, n_foot = 0, n_body = 0;
+    for (int y = 0; y < image.height; ++y)
+      for (int x = 0; x < image.width; ++x) {
+        const Eigen::Vector3i c = at(image, x, y);
+        if (c[0] < 40 && c[1] < 40 && c[2] > 60) foot_rows += y, ++n_foot;  // blue, not the sky-blue background
+        if (c[0] > c[2] + 60) body_rows += y, ++n_body;
+      }
+    REQUIRE(n_foot > 50);
+    REQUIRE(n_body > 1000);
+    CHECK(foot_rows / n_foot > body_rows / n_body + 40);  // rows grow downwards
+  }
+}

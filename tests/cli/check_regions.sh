@@ -85,6 +85,30 @@ else
   echo "check_regions: $cgal/armadillo.off missing: armadillo skipped"
 fi
 
+# render: a selection checked before deforming, on the camera options; deform --render draws the result.
+"$msdeform" render lift.off --handle sphere:0.5,0.5,0,0.1 --fixed halfspace:1,0,0,0.2 -o region.png >out.txt 2>&1 ||
+  { cat out.txt; fail "render a built region"; }
+grep -q "region: [0-9]* fixed, [0-9]* free, 1 handle(s)" out.txt || { cat out.txt; fail "render: region summary"; }
+grep -q "up +0 +0 +1" out.txt || { cat out.txt; fail "render: the bumpy plane is z-up"; }
+"$msdeform" render lift.off --sel built.sel --focus handle --view 90,20 --color selfint --size 160 120 -o selfint.png \
+  >out.txt 2>&1 || { cat out.txt; fail "render --color selfint"; }
+grep -q "self-intersecting triangle pairs: 0" out.txt || { cat out.txt; fail "render: self-intersections"; }
+"$msdeform" render lift.off --color detail --size 160 120 -o detail.png >/dev/null 2>&1 || fail "render --color detail"
+"$msdeform" deform lift.off --sel built.sel --def built.def --method shell -o drawn.off --render drawn.png --up z \
+  >/dev/null 2>&1 || fail "deform --render"
+for png in region.png selfint.png detail.png drawn.png; do
+  [ "$(head -c 8 "$png" | od -An -tx1 | tr -d ' ')" = "89504e470d0a1a0a" ] || fail "$png is not a PNG"
+done
+if [ -f "$cgal/armadillo.off" ]; then
+  "$msdeform" render "$cgal/armadillo.off" -o armadillo.png --size 160 120 >out.txt 2>&1 || fail "render armadillo"
+  grep -q "up +0 +1 +0" out.txt || { cat out.txt; fail "the armadillo is y-up"; }
+fi
+expect_error "--up w: expected auto, x, y, z" "$msdeform" render lift.off --up w -o x.png
+expect_error "--view 1: expected auto or AZ,EL" "$msdeform" render lift.off --view 1 -o x.png
+expect_error "--focus handle: the region has no handle" "$msdeform" render lift.off --focus handle -o x.png
+expect_error "needs a region" "$msdeform" render lift.off --color region -o x.png
+expect_error "the picture is a .png" "$msdeform" render lift.off -o x.jpg
+
 # Bad specs are refused by name, before any work.
 expect_error "--handle sphere:1,2,3: 3 numbers given, expected X,Y,Z,R" \
   "$msdeform" deform lift.off --handle sphere:1,2,3 --translate 0,0,1 -o x.off

@@ -1,0 +1,74 @@
+#include "apps/msdeform/camera_options.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh.h"
+
+namespace msd::cli {
+
+void CameraOptions::add_to(CLI::App& cmd) {
+  auto* g = cmd.add_option_group("camera", "Pictures: which way is up, where the camera sits, what it frames");
+  g->add_option("--up", up, "World axis drawn upwards: auto (away from the fixed vertices when they sit to one side, else from the principal axes: a flat shape is seen from "
+                            "above, anything else stands along its longest axis), x, y, z, -x, -y or -z")
+      ->capture_default_str();
+  g->add_option("--view", view, "Camera direction: auto, or AZ,EL in degrees (azimuth about up from the front, "
+                                "elevation above the horizon; auto is 31,34.4)")
+      ->capture_default_str();
+  g->add_option("--focus", focus, "Frame all of the shape, or its handles")
+      ->check(CLI::IsMember({"all", "handle"}))
+      ->capture_default_str();
+}
+
+void CameraOptions::apply(const Positions& P, const Region& region, RenderOptions& o) const {
+  ViewAxes axes;
+  if (up == "auto") {
+    axes = edit_view_axes(P, region.num_vertices() > 0 ? region.fixed_vertices() : std::vector<int>());
+  } else {
+    const bool negative = !up.empty() && up[0] == '-';
+    const std::string axis = negative ? up.substr(1) : up;
+    if (axis != "x" && axis != "y" && axis != "z")
+      throw InvalidInput("--up " + up + ": expected auto, x, y, z, -x, -y or -z");
+    axes = view_axes(P, (negative ? -1.0 : 1.0) * Vec3::Unit(axis[0] - 'x'));
+  }
+  o.up = axes.up;
+  if (view == "auto") {
+    o.view_direction = axes.default_direction();
+  } else {
+    const size_t comma = view.find(',');
+    char *end_az = nullptr, *end_el = nullptr;
+    const std::string az_text = view.substr(0, comma);
+    const std::string el_text = comma == std::string::npos ? "" : view.substr(comma + 1);
+    const double az = std::strtod(az_text.c_str(), &end_az), el = std::strtod(el_text.c_str(), &end_el);
+    if (comma == std::string::npos || az_text.empty() || el_text.empty() || *end_az || *end_el ||
+        !std::isfinite(az) || !std::isfinite(el) || std::abs(el) >= 90)
+      throw InvalidInput("--view " + view + ": expected auto or AZ,EL in degrees with |EL| < 90");
+    o.view_direction = axes.direction(az, el);
+  }
+  if (focus == "handle") {
+    if (region.num_handles() == 0) throw InvalidInput("--focus handle: the region has no handle");
+    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+    for (int v = 0; v < region.num_vertices(); ++v)
+      if (region.handle_of(v) >= 0) lo = lo.cwiseMin(P.row(v).transpose()), hi = hi.cwiseMax(P.row(v).transpose());
+    o.framing = Framing::BoundingSphere;
+    o.sphere_center = (lo + hi) / 2;
+    // the handles and some of what surrounds them; never a zero sphere (one handle vertex)
+    o.sphere_radius = std::max(0.75 * (hi - lo).norm(), 0.05 * bounding_box_diagonal(P));
+  }
+}
+
+Positions region_colors(const Region& region) {
+  static const Vec3 palette[] = {{0.84, 0.19, 0.15}, {0.20, 0.63, 0.17}, {0.55, 0.32, 0.71},
+                                 {0.95, 0.55, 0.10}, {0.10, 0.60, 0.62}, {0.85, 0.40, 0.65}};
+  Positions colors(region.num_vertices(), 3);
+  for (int v = 0; v < region.num_vertices(); ++v) {
+    const int k = region.handle_of(v);
+    const Vec3 c = k >= 0 ? palette[k % 6] : region.is_fixed(v) ? Vec3(0.38, 0.47, 0.62) : Vec3(0.80, 0.68, 0.54);
+    colors.row(v) = c.transpose();
+  }
+  return colors;
+}
+
+}  // namespace msd::cli

@@ -1,0 +1,82 @@
+#include <cstdio>
+#include <memory>
+
+#include "apps/msdeform/camera_options.h"
+#include "apps/msdeform/commands.h"
+#include "apps/msdeform/edit_case.h"
+#include "msdeform/analysis/self_intersections.h"
+#include "msdeform/core/atomic_file.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
+#include "msdeform/decomposition/low_pass.h"
+#include "msdeform/detail/normal_displacements.h"
+
+namespace msd::cli {
+
+void add_render_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand("render", "Draw a mesh (with its region, details or self-intersections) to a PNG, "
+                                           "e.g. to check a selection before deforming");
+  auto edit = std::make_shared<EditCaseOptions>();
+  auto camera = std::make_shared<CameraOptions>();
+  auto output = std::make_shared<std::string>();
+  auto color = std::make_shared<std::string>("auto");
+  auto size = std::make_shared<std::vector<int>>(std::vector<int>{800, 600});
+  auto detail_scale = std::make_shared<double>(0);
+  edit->add_to(*cmd);
+  camera->add_to(*cmd);
+  cmd->add_option("--color", *color,
+                  "auto (region when one is given), region (fixed blue, free clay, handles red, green, ...), detail "
+                  "(signed height over a low-pass base), selfint (self-intersecting triangles in red), none")
+      ->check(CLI::IsMember({"auto", "region", "detail", "selfint", "none"}))
+      ->capture_default_str();
+  cmd->add_option("--detail-scale", *detail_scale, "--color detail: the low-pass detail scale (0: automatic)")
+      ->check(CLI::Range(0.0, 1e300));
+  cmd->add_option("--size", *size, "Width and height in pixels")->expected(2)->check(CLI::Range(16, 8192));
+  cmd->add_option("-o,--output", *output, "PNG to write (atomically)")->required();
+  cmd->callback([=] {
+    if (file_extension(*output) != ".png") throw InvalidInput("render: -o " + *output + ": the picture is a .png");
+    check_writable(*output, "-o");
+    const EditCase c = edit->load(/*need_transforms=*/false, /*need_region=*/false);
+    RenderOptions o;
+    o.width = (*size)[0];
+    o.height = (*size)[1];
+    camera->apply(c.P, c.region, o);
+    const bool has_region = c.region.num_vertices() > 0;
+    const std::string mode = *color == "auto" ? (has_region ? "region" : "none") : *color;
+    Positions colors;
+    Eigen::VectorXd heights;
+    if (mode == "region") {
+      if (!has_region) throw InvalidInput("--color region needs a region: --sel, or --fixed / --handle");
+      colors = region_colors(c.region);
+      o.vertex_colors = &colors;
+      std::printf("region: %zu fixed, %zu free, %d handle(s)\n", c.region.fixed_vertices().size(),
+                  c.region.free_vertices().size(), c.region.num_handles());
+    } else if (mode == "detail") {
+      require_surface(c, "render --color detail");
+      LowPassOptions lp;
+      lp.detail_scale = *detail_scale;
+      LowPassReport report;
+      const Positions B = low_pass_base(c.P, c.F, lp, &report);
+      heights = normal_displacement_heights(c.P, B, c.F);
+      o.vertex_scalar = &heights;
+      o.scalar_label = "detail height";
+      std::printf("details over a low-pass base at scale %.4g: heights in [%.4g, %.4g]\n", report.detail_scale,
+                  heights.minCoeff(), heights.maxCoeff());
+    } else if (mode == "selfint") {
+      require_surface(c, "render --color selfint");
+      std::vector<std::pair<int, int>> pairs;
+      const int n = count_self_intersections(c.P, c.F, &pairs);
+      colors = Positions::Constant(c.P.rows(), 3, 0.85).rowwise() - Eigen::RowVector3d(0, 0.1, 0.2);
+      for (const auto& [f, g] : pairs)
+        for (int face : {f, g})
+          for (int k = 0; k < 3; ++k) colors.row(c.F(face, k)) << 0.9, 0.05, 0.05;
+      o.vertex_colors = &colors;
+      std::printf("self-intersecting triangle pairs: %d (drawn in red)\n", n);
+    }
+    render_png(c.P, c.F, *output, o);
+    std::printf("wrote %s (%dx%d, up %+.0f %+.0f %+.0f)\n", output->c_str(), o.width, o.height, o.up.x(), o.up.y(),
+                o.up.z());
+  });
+}
+
+}  // namespace msd::cli

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <cstdio>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -514,6 +515,12 @@ void ArapDeformer::run(const Positions& targets, Positions& out) {
       energy = anderson_step(energy);
     }
     energies_.push_back(energy);
+    if (progress_wanted()) {
+      char line[128];
+      std::snprintf(line, sizeof line, "arap: iteration %d, largest move %.3g of the diagonal", iterations,
+                    step / diagonal_);
+      progress(line);
+    }
   }
   if (tol == 0) converged = true;  // exactly max_iterations were asked for
   frame_report_.iterations = iterations;

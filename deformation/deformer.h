@@ -4,6 +4,7 @@
 //! and then driven frame by frame, so the command line, the comparison and the tests treat all methods
 //! alike and read what each one can do from its traits.
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -108,6 +109,12 @@ class Deformer {
   //! InvalidInput for a non-finite point.
   void evaluate(const Positions& points, Positions& out) const;
 
+  //! Receives a line about long work while it runs: the phases of prepare() (e.g. a multi-scale method's
+  //! decomposition, base deformer and encoding) and each iteration of an iterative frame ("arap: iteration
+  //! 12, largest move 3.1e-4 of the diagonal"). Called on the calling thread. Empty (the default): nothing
+  //! is reported and no text is built, so frames stay allocation-free.
+  void set_progress(std::function<void(const std::string&)> callback) { progress_ = std::move(callback); }
+
   bool prepared() const { return prepared_; }
   const FrameReport& frame_report() const { return frame_report_; }
   //! What prepare() found that the user should know (e.g. details close to folding over a multi-scale
@@ -128,6 +135,13 @@ class Deformer {
   virtual void do_reset() {}
   virtual void do_evaluate(const Positions& points, Positions& out) const;
 
+  //! Whether set_progress() gave a callback (build the text only then), and the report itself.
+  bool progress_wanted() const { return static_cast<bool>(progress_); }
+  void progress(const std::string& line) const {
+    if (progress_) progress_(line);
+  }
+  const std::function<void(const std::string&)>& progress_callback() const { return progress_; }
+
   FrameReport frame_report_;  //!< filled by the frame where the method measures something
   std::vector<std::string> prepare_warnings_;  //!< filled by do_prepare() (cleared before it)
 
@@ -137,6 +151,7 @@ class Deformer {
   void end_frame(const Positions& out);
 
  private:
+  std::function<void(const std::string&)> progress_;
   bool prepared_ = false;
   int num_handles_ = 0, num_vertices_ = 0, num_constrained_ = 0;
 };

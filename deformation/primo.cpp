@@ -1,6 +1,7 @@
 #include "msdeform/deformation/primo.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <array>
 #include <cmath>
 #include <utility>
@@ -322,6 +323,11 @@ void PrimoDeformer::deform_local(const std::vector<Mat4>& transforms, Positions&
       if (last) energies_.push_back(e);
       change = step / diagonal_length_;
       e_prev = e;
+      if (progress_wanted()) {
+        char line[128];
+        std::snprintf(line, sizeof line, "primo: iteration %d, largest move %.3g of the diagonal", iterations, change);
+        progress(line);
+      }
       // A step no damping can make lower E, or E at the round-off floor of a rigid motion: a minimum.
       if (tolerance > 0 && (!moved || e <= energy_floor_ || step <= tolerance)) {
         converged = true;

@@ -31,9 +31,13 @@ DeformerTraits MultiscaleDeformer::traits() const {
 }
 
 void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Region& region) {
+  progress(name_ + ": decomposing S into a base and details (" + to_string(options_.decomposition.kind) + " base)");
   decomposition_ = decompose(S, F, region, options_.decomposition);
   const Decomposition& d = decomposition_;
   if (!d.report.warning.empty()) prepare_warnings_.push_back(d.report.warning);
+  progress(name_ + ": preparing the base deformer (" + base_deformer_->name() + ") on " +
+           std::to_string(d.edit.rows()) + " base vertices");
+  base_deformer_->set_progress(progress_callback());
   try {
     base_deformer_->prepare(d.edit, d.edit_faces, d.edit_region);
   } catch (const Error& e) {
@@ -43,6 +47,7 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
   for (const std::string& w : base_deformer_->prepare_warnings()) prepare_warnings_.push_back(w);
   encoding_->set_anchor_vertices(region.constrained_vertices());
   if (!d.base_is_input) {
+    progress(name_ + ": encoding the details (" + encoding_->name() + ")");
     encoding_->encode(S, F, d.base, d.base_faces);  // D = S ⊖ B
     for (const std::string& w : encoding_->encode_warnings()) prepare_warnings_.push_back(name_ + ": " + w);
   }
@@ -56,6 +61,7 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
 
 void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
   const Decomposition& d = decomposition_;
+  base_deformer_->set_progress(progress_callback());  // the caller's, as it is now (none: allocates nothing)
   if (d.hierarchy) {
     base_deformer_->deform(transforms, edit_deformed_);  // the edit, on the control mesh
     d.hierarchy->refine(edit_deformed_, base_deformed_);  // B' = stencil · control'

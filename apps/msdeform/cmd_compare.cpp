@@ -197,7 +197,7 @@ void add_compare_command(CLI::App& app) {
   struct Args {
     std::vector<std::string> methods, scenes;
     std::string resolution = "10k", output = "compare-out", survey, reference;
-    bool no_self_intersections = false;
+    bool no_self_intersections = false, quiet = false;
     DeformerOptions method;
     EditCaseOptions mesh;  // --mesh with --sel / --def or the region and transform options
     CameraOptions camera;
@@ -228,6 +228,7 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("-o,--output", a->output, "Output folder (created; finished files are replaced atomically)")
       ->capture_default_str();
   cmd->add_flag("--no-self-intersections", a->no_self_intersections, "Skip the CGAL self-intersection count");
+  cmd->add_flag("-q,--quiet", a->quiet, "No progress lines on stderr");
   a->method.add_settings(*cmd);
   cmd->callback([a] {
     const auto start = std::chrono::steady_clock::now();
@@ -237,7 +238,18 @@ void add_compare_command(CLI::App& app) {
     else
       options.methods.erase(std::remove(options.methods.begin(), options.methods.end(), "primo"), options.methods.end());
     options.self_intersections = !a->no_self_intersections;
-    options.progress = [](const std::string& line) { std::fprintf(stderr, "  %s\n", line.c_str()); };
+    // One line per finished run: its place in all runs and, from the mean time per run so far, the time left.
+    auto started = std::make_shared<std::chrono::steady_clock::time_point>();  // set when the runs begin
+    auto done = std::make_shared<int>(0);
+    auto total = std::make_shared<int>(0);
+    const bool quiet = a->quiet;
+    options.progress = [=](const std::string& line) {
+      ++*done;
+      if (quiet) return;
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - *started).count();
+      const double left = *total > *done ? elapsed / *done * (*total - *done) : 0;
+      std::fprintf(stderr, "  [%d/%d, %.0f s, about %.0f s left] %s\n", *done, *total, elapsed, left, line.c_str());
+    };
     check_method_names(options.methods);  // fail fast, before any work
     const RegionOptions& r = a->mesh.region;
     if (a->mesh.mesh.empty() && (r.builds_region() || r.builds_transforms() || !a->mesh.sel.empty() ||
@@ -261,7 +273,7 @@ void add_compare_command(CLI::App& app) {
     }
     std::vector<EditCase> cases;
     for (const auto& s : scenes) {
-      std::fprintf(stderr, "building scene %s (%s vertices)\n", s.c_str(), a->resolution.c_str());
+      if (!a->quiet) std::fprintf(stderr, "building scene %s (%s vertices)\n", s.c_str(), a->resolution.c_str());
       cases.push_back(scene_case(s, resolution));
     }
     if (!a->mesh.mesh.empty()) cases.push_back(a->mesh.load());
@@ -273,6 +285,8 @@ void add_compare_command(CLI::App& app) {
     if (!a->method.cage_file.empty() && cases.size() != 1)
       throw InvalidInput("--cage encloses one input: give it with --mesh alone (no --scenes or --survey), or leave "
                          "it out to generate a cage around each edit");
+    *total = static_cast<int>(cases.size() * options.methods.size());
+    *started = std::chrono::steady_clock::now();
     std::vector<MethodSettings> settings;  // per case (a subdivision base takes the case's control mesh)
     for (const auto& c : cases) settings.push_back(a->method.method_settings(c));
     const fs::path out(a->output);
@@ -288,7 +302,8 @@ void add_compare_command(CLI::App& app) {
     std::vector<std::vector<Image>> tiles_by_scene;
     for (size_t i = 0; i < cases.size(); ++i) {
       const EditCase& c = cases[i];
-      std::fprintf(stderr, "%s: %zu vertices, %zu methods\n", c.name.c_str(), size_t(c.P.rows()), options.methods.size());
+      if (!a->quiet)
+        std::fprintf(stderr, "%s: %zu vertices, %zu methods\n", c.name.c_str(), size_t(c.P.rows()), options.methods.size());
       options.settings = settings[i];
       std::vector<MethodResult> results = compare_methods(c, options);
       const Positions& rest = c.P;
@@ -340,7 +355,7 @@ void add_compare_command(CLI::App& app) {
         so.images.push_back(png);
         so.captions.push_back(caption(r));
       }
-      std::fprintf(stderr, "  rendered %zu pictures\n", column.size());
+      if (!a->quiet) std::fprintf(stderr, "  rendered %zu pictures\n", column.size());
       scene_outputs.push_back(so);
       tiles_by_scene.push_back(std::move(column));
       all.insert(all.end(), std::make_move_iterator(results.begin()), std::make_move_iterator(results.end()));

@@ -6,6 +6,7 @@
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/deformers.h"
 #include "apps/msdeform/edit_case.h"
+#include "apps/msdeform/progress.h"
 #include "msdeform/analysis/metrics.h"
 #include "msdeform/core/atomic_file.h"
 #include "msdeform/core/errors.h"
@@ -47,6 +48,8 @@ void add_deform_command(CLI::App& app) {
   CLI::Option* weld_option = cmd->add_option("--weld", *weld,
                   "Weld vertices within EPS (mesh units; 0: identical coordinates) before deforming, so a mesh split "
                   "along seams deforms as one surface; the output keeps the file's vertices and faces");
+  auto quiet = std::make_shared<bool>(false);
+  cmd->add_flag("-q,--quiet", *quiet, "No progress lines on stderr (warnings still print)");
   auto render_output = std::make_shared<std::string>();
   auto camera = std::make_shared<CameraOptions>();
   cmd->add_option("--render", *render_output, "Also draw the result to this PNG, coloured by the region's roles");
@@ -89,12 +92,17 @@ void add_deform_command(CLI::App& app) {
       throw InvalidInput("--controls-output " + *controls_output + ": a lattice's control points have no faces, which "
                          "STL cannot store; use .off, .obj or .ply");
     const Positions& rest = c.P;
+    auto printer = std::make_shared<ProgressPrinter>(*quiet);
+    deformer->set_progress([printer](const std::string& line) { (*printer)(line); });
+    (*printer)(deformer->name() + ": preparing on " + std::to_string(rest.rows()) + " vertices");
     auto t0 = Clock::now();
     deformer->prepare(c.P, c.F, c.region);
+    (*printer)(deformer->name() + ": first frame (warms caches and buffers)");
     const double prepare_ms = ms_since(t0);
     Positions out(rest.rows(), 3);
     deformer->deform(c.transforms, out);  // first frame warms caches and buffers
     deformer->reset();  // the timed frame starts from rest too (an iterative one would start from the first)
+    (*printer)(deformer->name() + ": the timed frame, from rest");
     t0 = Clock::now();
     deformer->deform(c.transforms, out);
     const double frame_ms = ms_since(t0);

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Regions and transforms on the command line (ctest test cli_regions; issue 16, part 2): the knight's
-# libigl edit and a y-up armadillo edit as one command each, without hand-written files; --write-sel /
-# --write-def reproduce the same deformation through files; transforms compose in order, about the
-# handle's rest centroid; bad specs are refused by name.
+# The command line without hand-written files (ctest test cli_regions; issue 16, parts 2 to 4): the
+# knight's libigl edit and a y-up armadillo edit as one command each; --write-sel / --write-def reproduce
+# the same deformation through files; transforms compose in order, about the handle's centroid; render
+# and the camera options; progress on stderr and --quiet; bad specs refused by name.
 # Usage: check_regions.sh MSDEFORM WORK_DIR SHARED_DATA CGAL_MESHES
 set -uo pipefail
 msdeform="$1"
@@ -108,6 +108,20 @@ expect_error "--view 1: expected auto or AZ,EL" "$msdeform" render lift.off --vi
 expect_error "--focus handle: the region has no handle" "$msdeform" render lift.off --focus handle -o x.png
 expect_error "needs a region" "$msdeform" render lift.off --color region -o x.png
 expect_error "the picture is a .png" "$msdeform" render lift.off -o x.jpg
+
+# Progress on stderr while deform and compare work; none with --quiet.
+"$msdeform" deform lift.off --sel built.sel --def built.def --method multiscale --base-method arap --iterations 3 \
+  --detail-scale 0.3 -o p.off >/dev/null 2>err.txt || { cat err.txt; fail "deform with progress"; }
+for text in "preparing on" "decomposing S" "preparing the base deformer (arap)" "arap: iteration 1," "the timed frame"; do
+  grep -qF "$text" err.txt || { cat err.txt; fail "deform progress: no '$text'"; }
+done
+"$msdeform" deform lift.off --sel built.sel --def built.def --method arap --iterations 3 -q -o p.off >/dev/null \
+  2>err.txt || fail "deform -q"
+grep -q "^\[" err.txt && { cat err.txt; fail "deform -q printed progress"; }
+grep -q "^warning: arap: stopped after 3 iterations" err.txt || { cat err.txt; fail "deform -q hid a warning"; }
+"$msdeform" compare --scenes lift --resolution 2k --methods shell,propagate -o progress-cmp >/dev/null 2>err.txt ||
+  fail "compare with progress"
+grep -q "\[2/2, [0-9]* s, about 0 s left\] lift / propagate" err.txt || { cat err.txt; fail "compare progress"; }
 
 # Bad specs are refused by name, before any work.
 expect_error "--handle sphere:1,2,3: 3 numbers given, expected X,Y,Z,R" \

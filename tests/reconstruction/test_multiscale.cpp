@@ -4,6 +4,7 @@
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/core/scenes.h"
 #include "msdeform/decomposition/fairing.h"
+#include "msdeform/deformation/arap.h"
 #include "msdeform/deformation/shell.h"
 #include "msdeform/detail/displacement_vectors.h"
 #include "msdeform/detail/normal_displacements.h"
@@ -320,4 +321,33 @@ TEST_CASE("multiscale on a subdivision hierarchy: the edit runs on the coarse me
   MultiscaleOptions none;
   none.decomposition.kind = DecompositionKind::Subdivision;
   CHECK_THROWS_WITH(MultiscaleDeformer(none).prepare(s.P, s.F, s.region), Contains("control mesh"));
+}
+
+TEST_CASE("progress: prepare reports its phases and an iterative base deformer its iterations",
+          "[multiscale][progress]") {
+  const Scene s = scene("bend120");
+  MultiscaleOptions o;
+  o.decomposition.low_pass.detail_scale = 0.3;
+  ArapOptions arap;
+  arap.max_iterations = 5;
+  arap.tolerance = 0;  // exactly five
+  MultiscaleDeformer ms(o, std::make_unique<ArapDeformer>(arap));
+  std::vector<std::string> lines;
+  ms.set_progress([&](const std::string& line) { lines.push_back(line); });
+  ms.prepare(s.P, s.F, s.region);
+  REQUIRE(lines.size() == 3);
+  CHECK_THAT(lines[0], Contains("decomposing") && Contains("low-pass"));
+  CHECK_THAT(lines[1], Contains("preparing the base deformer (arap)"));
+  CHECK_THAT(lines[2], Contains("encoding the details (normal)"));
+  lines.clear();
+  Positions out;
+  ms.deform(s.transforms, out);
+  REQUIRE(lines.size() == 5);  // one line per ARAP iteration of the base
+  CHECK_THAT(lines[0], Contains("arap: iteration 1, largest move"));
+  CHECK_THAT(lines[4], Contains("arap: iteration 5,"));
+  // Without a callback nothing is reported (and nothing is built).
+  ms.set_progress(nullptr);
+  lines.clear();
+  ms.deform(s.transforms, out);
+  CHECK(lines.empty());
 }

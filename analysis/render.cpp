@@ -248,7 +248,7 @@ Camera frame_camera(const Positions& Pc, double radius, double pad, const Vec3& 
   return cam;
 }
 
-void check_options(const RenderOptions& o, const Positions& P) {
+void check_options(const RenderOptions& o, const Positions& P, const Faces& F) {
   auto fail = [](const std::string& what) { throw InvalidInput("render: " + what); };
   if (o.width < 1 || o.width > 16384 || o.height < 1 || o.height > 16384)
     fail("image size " + std::to_string(o.width) + "x" + std::to_string(o.height) + " is outside 1..16384");
@@ -264,6 +264,10 @@ void check_options(const RenderOptions& o, const Positions& P) {
   if (!std::isfinite(o.point_radius) || o.point_radius < 0)
     fail("point_radius = " + std::to_string(o.point_radius) +
          " must be finite and non-negative (0: automatic)");
+  if (o.highlighted_faces)
+    for (int f : *o.highlighted_faces)
+      if (f < 0 || f >= F.rows())
+        fail("highlighted face " + std::to_string(f) + " is not a row of F (" + std::to_string(F.rows()) + " faces)");
   if (o.vertex_colors) {
     const Positions& c = *o.vertex_colors;
     if (c.rows() != P.rows())
@@ -383,7 +387,7 @@ std::pair<double, double> robust_scalar_range(const Eigen::VectorXd& values) {
 Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
   check_mesh_arrays(P, F, "render");
   if (P.rows() == 0) throw InvalidInput("render: nothing to draw (no vertices)");
-  check_options(o, P);
+  check_options(o, P, F);
   const bool points = F.rows() == 0;
   const double point_radius = !points ? 0.0 : o.point_radius > 0 ? o.point_radius : default_point_radius(P);
 
@@ -425,6 +429,12 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
   const Vec3 base = to_linear(o.base_color);
   const Eigen::VectorXd* scalar = o.vertex_scalar;
   const Positions* colors = o.vertex_colors;
+  std::vector<char> highlighted;  // per face, when some are highlighted
+  if (o.highlighted_faces && !o.highlighted_faces->empty()) {
+    highlighted.assign(F.rows(), 0);
+    for (int f : *o.highlighted_faces) highlighted[f] = 1;
+  }
+  const Vec3 highlight = to_linear(o.highlight_color);
   auto albedo_of = [&](double s) { return to_linear(viridis((s - legend.lo) / (legend.hi - legend.lo))); };
 
   // Lambert from the head and key lights at point (shading normal n, geometric normal ng, both unit and
@@ -457,7 +467,8 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
     Vec3 n = (w0 * N.row(a) + u * N.row(b) + v * N.row(c)).transpose();
     n = n.norm() > 1e-12 ? n.normalized() : ng;
     if (n.dot(ng) < 0) n = -n;
-    const Vec3 albedo = scalar   ? albedo_of(w0 * (*scalar)[a] + u * (*scalar)[b] + v * (*scalar)[c])
+    const Vec3 albedo = !highlighted.empty() && highlighted[f] ? highlight
+                        : scalar ? albedo_of(w0 * (*scalar)[a] + u * (*scalar)[b] + v * (*scalar)[c])
                         : colors ? to_linear((w0 * colors->row(a) + u * colors->row(b) + v * colors->row(c)).transpose())
                                  : base;
     return light(w0 * pa + u * pb + v * pc, n, ng, view, albedo);

@@ -64,6 +64,9 @@ struct RenderOptions {
   //! #V by 3 sRGB colours in [0, 1], interpolated over the faces, when there is no vertex_scalar (e.g. the
   //! roles of a region: fixed, free, each handle); null for base_color.
   const Positions* vertex_colors = nullptr;
+  //! Faces (rows of F) drawn in highlight_color over any other colouring, e.g. self-intersecting ones.
+  const std::vector<int>* highlighted_faces = nullptr;
+  Vec3 highlight_color = Vec3(0.90, 0.05, 0.05);
   std::string scalar_label;  //!< title of the legend
   //! Colour-map range; when equal, robust_scalar_range(*vertex_scalar) is used.
   double scalar_min = 0, scalar_max = 0;

@@ -226,7 +226,9 @@ Scene make_scene(SceneShape shape, SceneEdit edit, double amount, const SceneOpt
   return s;
 }
 
-std::vector<std::string> scene_names() { return {"lift", "bend120", "twist135", "bar-lift", "bar-bend120", "bar-twist135"}; }
+std::vector<std::string> scene_names() {
+  return {"lift", "bend120", "twist135", "bar-lift", "bar-bend120", "bar-twist135", "crease120"};
+}
 
 Scene make_scene(const std::string& name, const SceneOptions& options) {
   const bool is_bar = name.rfind("bar-", 0) == 0;
@@ -239,7 +241,14 @@ Scene make_scene(const std::string& name, const SceneOptions& options) {
     s = make_scene(shape, SceneEdit::Bend, 120, options);
   else if (edit == "twist135")
     s = make_scene(shape, SceneEdit::Twist, 135, options);
-  else {
+  else if (name == "crease120") {
+    // Fig. 9.10: the plane bent by 120° within a free strip 0.1 wide, so the base curves with a radius
+    // (about 0.05) near the bumps' height and displacements along its normals cross.
+    SceneOptions crease = options;
+    crease.fixed_end = 0.45;
+    crease.handle_start = 0.55;
+    s = make_scene(SceneShape::Plane, SceneEdit::Bend, 120, crease);
+  } else {
     std::string known;
     for (const auto& n : scene_names()) known += (known.empty() ? "" : ", ") + n;
     throw InvalidInput("unknown scene '" + name + "' (known: " + known + ")");

@@ -7,6 +7,8 @@
 #include <sstream>
 
 #include "apps/compare/runner.h"
+#include "apps/compare/verdict.h"
+#include "msdeform/analysis/self_intersections.h"
 #include "apps/msdeform/camera_options.h"
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/deformers.h"
@@ -25,7 +27,7 @@ namespace {
 namespace fs = std::filesystem;
 
 std::vector<std::string> default_scenes() {
-  return {"lift", "bend120", "twist135", "bar-lift", "bar-bend120", "bar-twist135"};
+  return {"lift", "bend120", "twist135", "bar-lift", "bar-bend120", "bar-twist135", "crease120"};
 }
 
 std::string html_escape(const std::string& s) {
@@ -94,8 +96,15 @@ constexpr std::array<std::pair<const char*, const char*>, 11> kFigure916Rows = {
     {"lattice", "lattice FFD (space)"},
 }};
 
-std::string figure916_html(const std::vector<MethodResult>& results, const std::string& reference,
-                           const std::string& base_method) {
+// A cell's verdict: its colour class and the reason in words (★ marks the edit's best).
+std::string verdict_html(const Assessment& a) {
+  return std::string("<div class=\"verdict\"><b>") + (a.best ? "★ best, " : "") + to_string(a.verdict) + "</b>: " +
+         html_escape(a.reason) + "</div>";
+}
+
+std::string figure916_html(const std::vector<MethodResult>& results, const std::vector<Assessment>& assessments,
+                           const std::string& reference, const std::string& base_method) {
+  auto assessment = [&](const MethodResult* r) -> const Assessment& { return assessments[r - results.data()]; };
   auto find = [&](const std::string& scene, const std::string& method) -> const MethodResult* {
     if (method == "multiscale") return best_multiscale(results, scene);
     for (const MethodResult& r : results)
@@ -115,12 +124,15 @@ std::string figure916_html(const std::vector<MethodResult>& results, const std::
       bool any = false;
       for (const char* scene : fig.scenes) {
         const MethodResult* r = find(scene, method);
-        row << "<td>";
         if (r) {
           any = true;
+          row << "<td class=\"" << to_string(assessment(r).verdict) << "\">";
           row << "<img src=\"images/" << html_escape(r->scene + "--" + r->method) << ".png\" alt=\"\"><br>";
+          row << verdict_html(assessment(r));
           if (std::string(method) == "multiscale") row << html_escape(r->method) << ": ";
-          row << html_escape(caption(*r));
+          row << "<small>" << html_escape(caption(*r)) << "</small>";
+        } else {
+          row << "<td>";
         }
         row << "</td>";
       }
@@ -141,21 +153,62 @@ std::string figure916_html(const std::vector<MethodResult>& results, const std::
          "edits; " + measure + "</p>\n" + h.str();
 }
 
-std::string index_html(const std::vector<MethodResult>& results, const std::vector<SceneOutput>& scenes,
-                       const std::vector<std::string>& methods, const std::string& reference,
-                       const std::string& base_method) {
+// Methods × edits, each cell coloured by its verdict with the reason, then each edit's charts.
+std::string verdicts_html(const std::vector<MethodResult>& results, const std::vector<Assessment>& assessments,
+                          const std::vector<SceneOutput>& scenes, const std::vector<std::string>& methods) {
+  std::ostringstream h;
+  const VerdictThresholds t;
+  h << "<h2>Verdicts: which method for which edit, and why</h2>\n<p>Each cell is judged on its edit: "
+       "<span class=\"good\">good</span>, <span class=\"fair\">fair</span> (rigidity over "
+    << t.fair_rigidity << "× the edit's most rigid result, or details changed by over " << 100 * t.fair_distortion
+    << " % of their height), <span class=\"poor\">poor</span> (over " << t.poor_rigidity << "×, or "
+    << 100 * t.poor_distortion << " %), <span class=\"broken\">broken</span> (self-intersecting triangles, or "
+       "triangles folded over a multi-scale base), <span class=\"failed\">failed</span> (with its message). "
+       "★ marks the best of each edit: the most rigid without broken triangles, then the least detail change.</p>\n"
+       "<table class=\"verdicts\"><tr><th></th>";
+  for (const auto& sc : scenes) h << "<th>" << html_escape(sc.name) << "</th>";
+  h << "</tr>\n";
+  for (const std::string& method : methods) {
+    h << "<tr><th>" << html_escape(method) << "</th>";
+    for (const auto& sc : scenes) {
+      const auto it = std::find_if(results.begin(), results.end(),
+                                   [&](const MethodResult& r) { return r.scene == sc.name && r.method == method; });
+      if (it == results.end()) {
+        h << "<td></td>";
+        continue;
+      }
+      const Assessment& a = assessments[it - results.begin()];
+      h << "<td class=\"" << to_string(a.verdict) << "\">" << verdict_html(a) << "</td>";
+    }
+    h << "</tr>\n";
+  }
+  h << "</table>\n";
+  return h.str();
+}
+
+std::string index_html(const std::vector<MethodResult>& results, const std::vector<Assessment>& assessments,
+                       const std::vector<SceneOutput>& scenes, const std::vector<std::string>& methods,
+                       const std::string& reference, const std::string& base_method) {
   std::ostringstream h;
   h << "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>msdeform comparison</title>\n"
        "<style>body{font-family:sans-serif;margin:1.5em}table{border-collapse:collapse;font-size:13px}"
        "td,th{border:1px solid #bbb;padding:3px 6px;text-align:right}th{background:#eee}"
        "td:nth-child(-n+2){text-align:left}img{width:320px;border:1px solid #ccc}"
-       ".grid td{text-align:center;vertical-align:top;font-size:12px}</style></head><body>\n"
+       ".grid td{text-align:center;vertical-align:top;font-size:12px}.verdicts td{text-align:left;font-size:12px;"
+       "max-width:16em}.verdict{margin:2px 0}.good{background:#d8f0d0}.fair{background:#eef3c0}"
+       ".poor{background:#fbe0b8}.broken{background:#f6c4c0}.failed{background:#e0e0e0}svg{display:block;"
+       "margin:4px 0}</style></head><body>\n"
        "<h1>msdeform: methods and detail encodings compared</h1>\n"
-       "<p>Colour: change of the detail heights (normal displacements over a faired base, seed 9.3) against "
+       "<p>Pictures: colour is the change of the detail heights (normal displacements over a faired base, seed 9.3) against "
        "the input (plain where it is not measured: see the notes above the metrics); one camera per scene; a point "
        "cloud is drawn as one sphere per point. Files: <a href=\"metrics.csv\">metrics.csv</a>, "
        "<a href=\"metrics.md\">metrics.md</a>, <a href=\"contact_sheet.png\">contact_sheet.png</a>, meshes/.</p>\n";
-  h << figure916_html(results, reference, base_method);
+  h << verdicts_html(results, assessments, scenes, methods);
+  h << figure916_html(results, assessments, reference, base_method);
+  h << "<h2>Measured, per edit</h2>\n<p>Bars coloured by verdict; frame time on a log axis; the scatter puts "
+       "rigidity (lower is better) against frame time.</p>\n";
+  for (const auto& sc : scenes)
+    h << "<h3>" << html_escape(sc.name) << "</h3>\n" << edit_charts_svg(results, assessments, sc.name);
   h << "<h2>All pictures</h2>\n<table class=\"grid\"><tr><th></th>";
   for (const auto& s : scenes) h << "<th>" << html_escape(s.name) << "</th>";
   h << "</tr>\n";
@@ -209,7 +262,7 @@ void add_compare_command(CLI::App& app) {
     for (const auto& n : builtin_methods().names()) s += (s.empty() ? "" : ",") + n;
     return s;
   }())->delimiter(',');
-  cmd->add_option("--scenes", a->scenes, "Built-in scenes (default: lift,bend120,twist135,bar-lift,bar-bend120,bar-twist135; "
+  cmd->add_option("--scenes", a->scenes, "Built-in scenes (default: lift,bend120,twist135,bar-lift,bar-bend120,bar-twist135,crease120; "
                                          "none when --mesh is given)")
       ->delimiter(',');
   cmd->add_option("--resolution", a->resolution, "Approximate vertex count of the built-in scenes")->capture_default_str();
@@ -342,6 +395,13 @@ void add_compare_command(CLI::App& app) {
             save.vertex_scalar = &r.distortion_per_vertex;
             save.scalar_name = "detail_change";
           }
+          std::vector<std::pair<int, int>> pairs;  // drawn in red over the detail colours
+          std::vector<int> crossing;
+          if (r.self_intersections > 0) {
+            count_self_intersections(r.result, F, &pairs);
+            for (const auto& [f, g] : pairs) crossing.push_back(f), crossing.push_back(g);
+            ro.highlighted_faces = &crossing;
+          }
           Image img = render(r.result, F, ro);
           write_png(img, (out / png).string());
           save_mesh(r.result, F, (out / "meshes" / (c.name + "--" + r.method + ".ply")).string(), save);
@@ -370,11 +430,13 @@ void add_compare_command(CLI::App& app) {
     write_png(tile_images(tiles, static_cast<int>(scene_outputs.size()), tile_labels), (out / "contact_sheet.png").string());
     write_file_atomically((out / "metrics.csv").string(), metrics_csv(all));
     write_file_atomically((out / "metrics.md").string(), metrics_markdown(all));
-    write_file_atomically((out / "index.html").string(), index_html(all, scene_outputs, options.methods, options.reference, a->method.settings.base_method));
+    const std::vector<Assessment> assessments = assess(all);
+    write_file_atomically((out / "index.html").string(), index_html(all, assessments, scene_outputs, options.methods,
+                                                                    options.reference, a->method.settings.base_method));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     int failed = 0;
     for (const auto& r : all) failed += !r.ok;
-    std::printf("%s", metrics_markdown(all).c_str());
+    std::printf("%s", verdict_summary(all, assessments).c_str());  // the whole table is in metrics.md
     std::printf("\nwrote %s/index.html (%zu results, %d failed) in %.1f s\n", a->output.c_str(), all.size(), failed, seconds);
     if (failed > 0)  // the pages are written, but the exit status says not everything ran
       throw Error("compare: " + std::to_string(failed) + " of " + std::to_string(all.size()) +

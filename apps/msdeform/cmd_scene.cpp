@@ -12,7 +12,7 @@ void add_scene_command(CLI::App& app) {
   auto name = std::make_shared<std::string>();
   auto resolution = std::make_shared<std::string>("10k");
   auto dir = std::make_shared<std::string>();
-  cmd->add_option("name", *name, "lift, bend120, twist135 (bumpy plane) or bar-lift, bar-bend120, bar-twist135")
+  cmd->add_option("name", *name, "lift, bend120, twist135, crease120 (bumpy plane; crease120: Fig. 9.10, a bend tighter than the bumps) or bar-lift, bar-bend120, bar-twist135")
       ->required();
   cmd->add_option("--resolution", *resolution, "Approximate vertex count (e.g. 10k, 100k, 1M)")->capture_default_str();
   cmd->add_option("-o,--output", *dir, "Folder to write into (created if missing)")->required();

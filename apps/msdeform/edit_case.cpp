@@ -18,7 +18,7 @@ void EditCaseOptions::add_to(CLI::App& cmd) {
   auto* def_opt = cmd.add_option("--def", def, "Handle transforms: .def, one 4x4 matrix per handle");
   // A scene brings its own region and transforms: files given with it would be silently ignored.
   cmd.add_option("--scene", scene, "Built-in scene instead of files (it has its own region and transforms): lift, "
-                                   "bend120, twist135, bar-lift, bar-bend120, bar-twist135")
+                                   "bend120, twist135, bar-lift, bar-bend120, bar-twist135, crease120 (Fig. 9.10)")
       ->excludes(mesh_opt)
       ->excludes(sel_opt)
       ->excludes(def_opt);

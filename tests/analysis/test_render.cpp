@@ -534,3 +534,39 @@ TEST_CASE("view axes: CGAL's y-up armadillo stands upright, feet at the bottom o
     CHECK(foot_rows / n_foot > body_rows / n_body + 40);  // rows grow downwards
   }
 }
+
+TEST_CASE("render: vertex colours and highlighted faces paint the surface; bad ones are named",
+          "[analysis][render]") {
+  const Scene s = plane(2000);
+  RenderOptions o;
+  o.width = 120;
+  o.height = 90;
+  o.shadows = false;
+  // Mean colour of the pixels off the background.
+  auto mean_surface = [&](const Image& image) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double n = 0;
+    for (int y = 0; y < image.height; ++y)
+      for (int x = 0; x < image.width; ++x)
+        if ((at(image, x, y) - background_at(o, y)).cwiseAbs().maxCoeff() > 2) sum += at(image, x, y).cast<double>(), ++n;
+    return Eigen::Vector3d(sum / std::max(n, 1.0));
+  };
+  Positions green = Positions::Zero(s.P.rows(), 3);
+  green.col(1).setOnes();
+  o.vertex_colors = &green;
+  const Eigen::Vector3d g = mean_surface(render(s.P, s.F, o));
+  CHECK(g[1] > 2 * g[0]);
+  CHECK(g[1] > 2 * g[2]);
+  std::vector<int> all(s.F.rows());
+  for (int f = 0; f < s.F.rows(); ++f) all[f] = f;
+  o.highlighted_faces = &all;  // over the vertex colours
+  const Eigen::Vector3d r = mean_surface(render(s.P, s.F, o));
+  CHECK(r[0] > 2 * r[1]);
+  std::vector<int> outside = {static_cast<int>(s.F.rows())};
+  o.highlighted_faces = &outside;
+  CHECK_THROWS_WITH(render(s.P, s.F, o), Contains("highlighted face"));
+  o.highlighted_faces = nullptr;
+  const Positions short_colors = green.topRows(3);
+  o.vertex_colors = &short_colors;
+  CHECK_THROWS_WITH(render(s.P, s.F, o), Contains("vertex_colors has 3 rows"));
+}

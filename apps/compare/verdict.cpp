@@ -1,0 +1,240 @@
+#include "apps/compare/verdict.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <sstream>
+#include <tuple>
+
+namespace msd {
+namespace {
+
+std::string fmt(const char* f, double x) {
+  char text[64];
+  std::snprintf(text, sizeof text, f, x);
+  return text;
+}
+
+const char* colour(Verdict v) {
+  switch (v) {
+    case Verdict::Good: return "#5cb85c";
+    case Verdict::Fair: return "#c6d64a";
+    case Verdict::Poor: return "#f0a030";
+    case Verdict::Broken: return "#d9362b";
+    default: return "#9e9e9e";
+  }
+}
+
+std::string escape(const std::string& s) {
+  std::string out;
+  for (char c : s) out += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
+  return out;
+}
+
+// Results of one scene, by index into `results`, in their order.
+std::vector<size_t> of_scene(const std::vector<MethodResult>& results, const std::string& scene) {
+  std::vector<size_t> out;
+  for (size_t i = 0; i < results.size(); ++i)
+    if (results[i].scene == scene) out.push_back(i);
+  return out;
+}
+
+}  // namespace
+
+const char* to_string(Verdict v) {
+  switch (v) {
+    case Verdict::Good: return "good";
+    case Verdict::Fair: return "fair";
+    case Verdict::Poor: return "poor";
+    case Verdict::Broken: return "broken";
+    default: return "failed";
+  }
+}
+
+std::vector<Assessment> assess(const std::vector<MethodResult>& results, const VerdictThresholds& t) {
+  std::vector<Assessment> out(results.size());
+  std::vector<std::string> scenes;
+  for (const MethodResult& r : results)
+    if (std::find(scenes.begin(), scenes.end(), r.scene) == scenes.end()) scenes.push_back(r.scene);
+  for (const std::string& scene : scenes) {
+    const std::vector<size_t> ids = of_scene(results, scene);
+    auto broken = [&](const MethodResult& r) { return r.self_intersections > 0 || r.folded_faces > 0; };
+    double best_rigidity = INFINITY;
+    for (size_t i : ids)
+      if (results[i].ok && !broken(results[i]) && results[i].rigidity.count > 0)
+        best_rigidity = std::min(best_rigidity, results[i].rigidity.mean);
+    for (size_t i : ids) {
+      const MethodResult& r = results[i];
+      Assessment& a = out[i];
+      if (!r.ok) {
+        a = {Verdict::Failed, "failed: " + r.error.substr(0, 160), false};
+        continue;
+      }
+      if (broken(r)) {
+        a.verdict = Verdict::Broken;
+        if (r.self_intersections > 0) a.reason = std::to_string(r.self_intersections) + " self-intersecting triangle pairs";
+        if (r.folded_faces > 0)
+          a.reason += (a.reason.empty() ? "" : "; ") + std::to_string(r.folded_faces) + " triangles folded over the base";
+        continue;
+      }
+      std::vector<std::string> poor, fair, good;
+      if (r.rigidity.count > 0 && best_rigidity > 0 && std::isfinite(best_rigidity)) {
+        const double ratio = r.rigidity.mean / best_rigidity;
+        const std::string times = fmt(ratio < 10 ? "%.2g" : "%.0f", ratio);
+        const std::string text = "rigidity " + times + "× the edit's most rigid (the shape shears or stretches)";
+        if (ratio > t.poor_rigidity) poor.push_back(text);
+        else if (ratio > t.fair_rigidity) fair.push_back(text);
+        else good.push_back(ratio <= 1 ? "the most rigid" : "rigid (" + fmt("%.2g", ratio) + "× the most rigid)");
+      }
+      if (r.distortion.count > 0) {
+        const double d = r.distortion.mean;
+        const std::string text = "details changed by " + fmt("%.2g", 100 * d) + " % of their height";
+        if (d > t.poor_distortion) poor.push_back(text);
+        else if (d > t.fair_distortion) fair.push_back(text);
+        else good.push_back("details kept (" + fmt("%.2g", 100 * d) + " %)");
+      }
+      const std::vector<std::string>& why = !poor.empty() ? poor : !fair.empty() ? fair : good;
+      a.verdict = !poor.empty() ? Verdict::Poor : !fair.empty() ? Verdict::Fair : Verdict::Good;
+      for (const std::string& w : why) a.reason += (a.reason.empty() ? "" : "; ") + w;
+      if (a.reason.empty()) a.reason = "no quality measured for this input";
+    }
+    // Best: the most rigid unbroken result of the best verdict present, then the least distortion.
+    long best = -1;
+    for (size_t i : ids) {
+      const Assessment& a = out[i];
+      if (a.verdict == Verdict::Failed || a.verdict == Verdict::Broken) continue;
+      if (best < 0) {
+        best = static_cast<long>(i);
+        continue;
+      }
+      const auto key = [&](size_t k) {
+        const MethodResult& r = results[k];
+        return std::make_tuple(static_cast<int>(out[k].verdict), r.rigidity.count > 0 ? r.rigidity.mean : INFINITY,
+                               r.distortion.count > 0 ? r.distortion.mean : INFINITY);
+      };
+      if (key(i) < key(static_cast<size_t>(best))) best = static_cast<long>(i);
+    }
+    if (best >= 0) out[best].best = true;
+  }
+  return out;
+}
+
+std::string verdict_summary(const std::vector<MethodResult>& results, const std::vector<Assessment>& assessments) {
+  std::ostringstream s;
+  std::vector<std::string> scenes;
+  for (const MethodResult& r : results)
+    if (std::find(scenes.begin(), scenes.end(), r.scene) == scenes.end()) scenes.push_back(r.scene);
+  for (const std::string& scene : scenes) {
+    const std::vector<size_t> ids = of_scene(results, scene);
+    s << scene << ":";
+    for (size_t i : ids)
+      if (assessments[i].best)
+        s << " best " << results[i].method << " (" << assessments[i].reason << "; "
+          << fmt("%.3g", results[i].frame_ms) << " ms per frame)";
+    s << "\n";
+    for (Verdict v : {Verdict::Good, Verdict::Fair, Verdict::Poor, Verdict::Broken, Verdict::Failed}) {
+      std::string names;
+      for (size_t i : ids)
+        if (assessments[i].verdict == v) names += (names.empty() ? "" : ", ") + results[i].method;
+      if (!names.empty()) s << "  " << to_string(v) << ": " << names << "\n";
+    }
+  }
+  return s.str();
+}
+
+std::string edit_charts_svg(const std::vector<MethodResult>& results, const std::vector<Assessment>& assessments,
+                            const std::string& scene) {
+  const std::vector<size_t> ids = of_scene(results, scene);
+  if (ids.empty()) return "";
+  struct Panel {
+    const char* title;
+    bool log;
+    std::function<double(const MethodResult&)> value;  // < 0: not measured
+  };
+  const Panel panels[] = {
+      {"rigidity (mean)", false, [](const MethodResult& r) { return r.rigidity.count > 0 ? r.rigidity.mean : -1; }},
+      {"detail change (mean)", false,
+       [](const MethodResult& r) { return r.distortion.count > 0 ? r.distortion.mean : -1; }},
+      {"self-intersecting pairs", false,
+       [](const MethodResult& r) { return r.self_intersections < 0 ? -1.0 : double(r.self_intersections); }},
+      {"frame time [ms], log", true, [](const MethodResult& r) { return r.frame_ms > 0 ? r.frame_ms : -1; }},
+  };
+  const int label_w = 150, panel_w = 170, row_h = 17, top = 34;
+  const int width = label_w + 4 * panel_w, height = top + row_h * static_cast<int>(ids.size()) + 8;
+  std::ostringstream s;
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+    << "\" font-family=\"sans-serif\" font-size=\"11\">\n";
+  for (size_t row = 0; row < ids.size(); ++row) {
+    const MethodResult& r = results[ids[row]];
+    const int y = top + row_h * static_cast<int>(row);
+    s << "<text x=\"" << label_w - 6 << "\" y=\"" << y + 12 << "\" text-anchor=\"end\">"
+      << (assessments[ids[row]].best ? "★ " : "") << escape(r.method) << "</text>\n";
+  }
+  for (int p = 0; p < 4; ++p) {
+    const Panel& panel = panels[p];
+    const int x0 = label_w + p * panel_w + 4, bar_w = panel_w - 50;
+    double hi = 0, lo = INFINITY;
+    for (size_t i : ids)
+      if (results[i].ok && panel.value(results[i]) >= 0)
+        hi = std::max(hi, panel.value(results[i])), lo = std::min(lo, panel.value(results[i]));
+    s << "<text x=\"" << x0 << "\" y=\"14\" font-weight=\"bold\">" << panel.title << "</text>\n";
+    const double log_lo = std::log10(std::max(1e-4, std::isfinite(lo) ? lo : 1e-3)) - 0.5;
+    const double log_hi = std::log10(std::max(hi, 1e-4)) + 0.1;
+    for (size_t row = 0; row < ids.size(); ++row) {
+      const MethodResult& r = results[ids[row]];
+      const int y = top + row_h * static_cast<int>(row);
+      if (!r.ok) {
+        s << "<text x=\"" << x0 << "\" y=\"" << y + 12 << "\" fill=\"#a00\">failed</text>\n";
+        continue;
+      }
+      const double v = panel.value(r);
+      if (v < 0) {
+        s << "<text x=\"" << x0 << "\" y=\"" << y + 12 << "\" fill=\"#777\">n/a</text>\n";
+        continue;
+      }
+      double f = hi > 0 ? v / hi : 0;
+      if (panel.log) f = (std::log10(std::max(v, 1e-4)) - log_lo) / (log_hi - log_lo);
+      const int w = std::max(1, static_cast<int>(std::lround(std::clamp(f, 0.0, 1.0) * bar_w)));
+      s << "<rect x=\"" << x0 << "\" y=\"" << y + 2 << "\" width=\"" << w << "\" height=\"" << row_h - 4
+        << "\" fill=\"" << colour(assessments[ids[row]].verdict) << "\"/>";
+      s << "<text x=\"" << x0 + w + 3 << "\" y=\"" << y + 12 << "\">" << fmt("%.3g", v) << "</text>\n";
+    }
+  }
+  s << "</svg>\n";
+  // Quality against speed: rigidity (up is worse) over frame time (log).
+  const int W = 460, H = 260, L = 50, B = 30;
+  double tmin = INFINITY, tmax = 0, rmax = 0;
+  for (size_t i : ids)
+    if (results[i].ok && results[i].frame_ms > 0 && results[i].rigidity.count > 0) {
+      tmin = std::min(tmin, results[i].frame_ms), tmax = std::max(tmax, results[i].frame_ms);
+      rmax = std::max(rmax, results[i].rigidity.mean);
+    }
+  if (rmax > 0) {
+    const double a = std::floor(std::log10(tmin)), b = std::ceil(std::log10(tmax) + 1e-9);
+    auto px = [&](double t) { return L + (std::log10(t) - a) / std::max(b - a, 1.0) * (W - L - 20); };
+    auto py = [&](double q) { return H - B - q / rmax * (H - B - 20); };
+    s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H
+      << "\" font-family=\"sans-serif\" font-size=\"11\">\n"
+      << "<line x1=\"" << L << "\" y1=\"" << H - B << "\" x2=\"" << W - 10 << "\" y2=\"" << H - B << "\" stroke=\"#444\"/>"
+      << "<line x1=\"" << L << "\" y1=\"" << H - B << "\" x2=\"" << L << "\" y2=\"10\" stroke=\"#444\"/>\n"
+      << "<text x=\"" << (W + L) / 2 << "\" y=\"" << H - 4 << "\" text-anchor=\"middle\">frame time [ms], log</text>"
+      << "<text x=\"12\" y=\"" << H / 2 << "\" transform=\"rotate(-90 12 " << H / 2
+      << ")\" text-anchor=\"middle\">rigidity (lower is better)</text>\n";
+    for (double e = a; e <= b; ++e)
+      s << "<text x=\"" << px(std::pow(10, e)) << "\" y=\"" << H - B + 13 << "\" text-anchor=\"middle\">"
+        << fmt("%g", std::pow(10, e)) << "</text>";
+    s << "<text x=\"" << L - 4 << "\" y=\"18\" text-anchor=\"end\">" << fmt("%.2g", rmax) << "</text>\n";
+    for (size_t i : ids) {
+      const MethodResult& r = results[i];
+      if (!r.ok || r.frame_ms <= 0 || r.rigidity.count == 0) continue;
+      const double x = px(r.frame_ms), y = py(r.rigidity.mean);
+      s << "<circle cx=\"" << x << "\" cy=\"" << y << "\" r=\"4\" fill=\"" << colour(assessments[i].verdict)
+        << "\" stroke=\"#333\"/><text x=\"" << x + 6 << "\" y=\"" << y + 4 << "\">" << escape(r.method) << "</text>\n";
+    }
+    s << "</svg>\n";
+  }
+  return s.str();
+}
+
+}  // namespace msd

@@ -1,0 +1,43 @@
+#pragma once
+//! \file What the comparison says about each result, in words: a verdict per method and edit from
+//! measured thresholds (the seed's Fig. 9.16 question "which method suits which edit, and why"), the best
+//! result of each edit, and the page's inline SVG charts. Part of msd::compare.
+
+#include <string>
+#include <vector>
+
+#include "apps/compare/runner.h"
+
+namespace msd {
+
+enum class Verdict { Good, Fair, Poor, Broken, Failed };
+const char* to_string(Verdict v);  //!< "good", "fair", "poor", "broken", "failed"
+
+//! Thresholds of the verdicts. Rigidity (one-ring rotation residual) is judged against the most rigid
+//! result of the same edit, detail distortion (|Δh| over the largest detail height) absolutely.
+struct VerdictThresholds {
+  double fair_rigidity = 2, poor_rigidity = 4;         //!< × the edit's best rigidity
+  double fair_distortion = 0.10, poor_distortion = 0.25;  //!< of the largest detail height
+};
+
+struct Assessment {
+  Verdict verdict = Verdict::Failed;
+  std::string reason;  //!< in words, with the figures, e.g. "rigidity 5.1× the best (the shape shears)"
+  bool best = false;   //!< the edit's best result: the most rigid without broken triangles, then least distortion
+};
+
+//! One assessment per result (same order). Failed: the run threw. Broken: self-intersecting triangle pairs
+//! or triangles folded over a multi-scale base. Poor / fair: rigidity or distortion beyond the thresholds.
+//! Good otherwise. Metrics that were not measured (a point cloud) are not judged.
+std::vector<Assessment> assess(const std::vector<MethodResult>& results, const VerdictThresholds& t = {});
+
+//! A few lines for the terminal: per edit, the best result and why, then the methods by verdict.
+std::string verdict_summary(const std::vector<MethodResult>& results, const std::vector<Assessment>& assessments);
+
+//! Inline SVG (no script) for one edit: horizontal bars per method of rigidity, detail distortion,
+//! self-intersecting pairs and frame time (log axis), and a scatter of rigidity against frame time; bars
+//! coloured by verdict, failed runs marked "failed".
+std::string edit_charts_svg(const std::vector<MethodResult>& results, const std::vector<Assessment>& assessments,
+                            const std::string& scene);
+
+}  // namespace msd

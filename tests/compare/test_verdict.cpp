@@ -1,0 +1,73 @@
+#include <catch2/catch.hpp>
+
+#include <string>
+#include <vector>
+
+#include "apps/compare/verdict.h"
+
+using namespace msd;
+using Catch::Matchers::Contains;
+
+namespace {
+
+MethodResult result(const std::string& scene, const std::string& method, double rigidity, double distortion,
+                    int self_intersections = 0, int folded = -1) {
+  MethodResult r;
+  r.scene = scene;
+  r.method = method;
+  r.ok = true;
+  r.frame_ms = 1.5;
+  r.rigidity = {rigidity, rigidity, rigidity, 100};
+  r.distortion = {distortion, distortion, distortion, 100};
+  r.self_intersections = self_intersections;
+  r.folded_faces = folded;
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("verdicts: thresholds relative to the edit's most rigid result, reasons in words, one best per edit",
+          "[compare][verdict]") {
+  std::vector<MethodResult> results = {
+      result("bend", "arap", 0.01, 0.05),          // the most rigid
+      result("bend", "shell", 0.03, 0.05),         // 3× the most rigid: fair
+      result("bend", "lattice", 0.05, 0.05),       // 5×: poor
+      result("bend", "normal", 0.011, 0.30),       // details changed by 30 %: poor
+      result("bend", "laplacian", 0.001, 0.0, 4),  // most rigid of all, but self-intersecting: broken
+      result("bend", "multi", 0.012, 0.02, 0, 7),  // folded over its base: broken
+      result("lift", "arap", 0.02, 0.01),          // another edit: judged on its own
+  };
+  MethodResult failed;
+  failed.scene = "bend";
+  failed.method = "primo";
+  failed.error = "no convergence";
+  results.push_back(failed);
+  const std::vector<Assessment> a = assess(results);
+  REQUIRE(a.size() == results.size());
+  CHECK(a[0].verdict == Verdict::Good);
+  CHECK(a[0].best);
+  CHECK_THAT(a[0].reason, Contains("the most rigid") && Contains("details kept (5 %)"));
+  CHECK(a[1].verdict == Verdict::Fair);
+  CHECK_THAT(a[1].reason, Contains("rigidity 3× the edit's most rigid"));
+  CHECK(a[2].verdict == Verdict::Poor);
+  CHECK(a[3].verdict == Verdict::Poor);
+  CHECK_THAT(a[3].reason, Contains("details changed by 30 % of their height"));
+  CHECK(a[4].verdict == Verdict::Broken);
+  CHECK_THAT(a[4].reason, Contains("4 self-intersecting triangle pairs"));
+  CHECK_FALSE(a[4].best);  // broken results are never the best, however rigid
+  CHECK(a[5].verdict == Verdict::Broken);
+  CHECK_THAT(a[5].reason, Contains("7 triangles folded over the base"));
+  CHECK(a[6].verdict == Verdict::Good);
+  CHECK(a[6].best);
+  CHECK(a[7].verdict == Verdict::Failed);
+  CHECK_THAT(a[7].reason, Contains("failed: no convergence"));
+  int best = 0;
+  for (const Assessment& x : a) best += x.best;
+  CHECK(best == 2);  // one per edit
+
+  const std::string summary = verdict_summary(results, a);
+  CHECK_THAT(summary, Contains("bend: best arap") && Contains("broken: laplacian, multi") && Contains("failed: primo"));
+  const std::string svg = edit_charts_svg(results, a, "bend");
+  CHECK_THAT(svg, Contains("<svg") && Contains("★ arap") && Contains(">failed<") && Contains("frame time"));
+  CHECK(edit_charts_svg(results, a, "no such edit").empty());
+}

@@ -153,6 +153,62 @@ std::string figure916_html(const std::vector<MethodResult>& results, const std::
          "edits; " + measure + "</p>\n" + h.str();
 }
 
+// The command-line options of a method: the option groups of `cmd` that configure it (deformers.cpp).
+std::string method_options_html(const CLI::App& cmd, const std::string& method) {
+  std::vector<std::string> groups;
+  if (method.rfind("multiscale", 0) == 0) groups = {"multiscale", "shell"};
+  else if (method == "arap" || method == "primo") groups = {method, "iterative methods"};
+  else if (method == "lattice" || method == "rbf" || method.rfind("cage", 0) == 0) groups = {"space"};
+  else groups = {method};
+  std::ostringstream h;
+  for (const std::string& name : groups) {
+    const CLI::App* g = nullptr;
+    try {
+      g = cmd.get_option_group(name);
+    } catch (const std::exception&) {
+      continue;  // a method without options of its own (gradient)
+    }
+    h << "<h3>" << html_escape(g->get_description()) << "</h3>\n<table>";
+    for (const CLI::Option* o : g->get_options())
+      h << "<tr><td>" << html_escape(o->get_name()) << "</td><td>" << html_escape(o->get_description())
+        << (o->get_default_str().empty() ? "" : " (default " + html_escape(o->get_default_str()) + ")")
+        << "</td></tr>\n";
+    h << "</table>\n";
+  }
+  const std::string options = h.str();
+  return options.empty() ? "<p>No options of its own.</p>\n" : options;
+}
+
+// One page per method (methods/NAME.html): what it is, its result and verdict on every edit, its options.
+std::string method_page_html(const MethodEntry& entry, const std::vector<MethodResult>& results,
+                             const std::vector<Assessment>& assessments, const std::string& options) {
+  std::ostringstream h;
+  h << "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>msdeform: " << html_escape(entry.name)
+    << "</title>\n<style>body{font-family:sans-serif;margin:1.5em}table{border-collapse:collapse;font-size:13px}"
+       "td,th{border:1px solid #bbb;padding:3px 6px;vertical-align:top}img{width:320px;border:1px solid #ccc}"
+       ".good{background:#d8f0d0}.fair{background:#eef3c0}.poor{background:#fbe0b8}.broken{background:#f6c4c0}"
+       ".failed{background:#e0e0e0}</style></head><body>\n<p><a href=\"../index.html\">all methods</a></p>\n<h1>"
+    << html_escape(entry.name) << "</h1>\n<p>Seed section " << html_escape(entry.section) << ": "
+    << html_escape(entry.summary) << "</p>\n<h2>On the edits of this comparison</h2>\n<table><tr>";
+  std::ostringstream cells;
+  for (size_t i = 0; i < results.size(); ++i) {
+    const MethodResult& r = results[i];
+    if (r.method != entry.name) continue;
+    h << "<th>" << html_escape(r.scene) << "</th>";
+    cells << "<td class=\"" << to_string(assessments[i].verdict) << "\"><img src=\"../images/"
+          << html_escape(r.scene + "--" + r.method) << ".png\" alt=\"\"><br>" << verdict_html(assessments[i])
+          << "<small>" << html_escape(caption(r));
+    if (r.ok) {
+      char text[80];
+      std::snprintf(text, sizeof text, "; prepare %.3g ms, frame %.3g ms", r.prepare_ms, r.frame_ms);
+      cells << text;
+    }
+    cells << "</small></td>";
+  }
+  h << "</tr>\n<tr>" << cells.str() << "</tr></table>\n<h2>Options</h2>\n" << options << "</body></html>\n";
+  return h.str();
+}
+
 // Methods × edits, each cell coloured by its verdict with the reason, then each edit's charts.
 std::string verdicts_html(const std::vector<MethodResult>& results, const std::vector<Assessment>& assessments,
                           const std::vector<SceneOutput>& scenes, const std::vector<std::string>& methods) {
@@ -169,7 +225,7 @@ std::string verdicts_html(const std::vector<MethodResult>& results, const std::v
   for (const auto& sc : scenes) h << "<th>" << html_escape(sc.name) << "</th>";
   h << "</tr>\n";
   for (const std::string& method : methods) {
-    h << "<tr><th>" << html_escape(method) << "</th>";
+    h << "<tr><th><a href=\"methods/" << html_escape(method) << ".html\">" << html_escape(method) << "</a></th>";
     for (const auto& sc : scenes) {
       const auto it = std::find_if(results.begin(), results.end(),
                                    [&](const MethodResult& r) { return r.scene == sc.name && r.method == method; });
@@ -228,14 +284,31 @@ std::string index_html(const std::vector<MethodResult>& results, const std::vect
     for (const std::string& note : notes) h << "<li>" << html_escape(note) << "</li>\n";
     h << "</ul>\n";
   }
-  h << "<table>";
+  // One table per edit, without the columns that say nothing there: the same text in every row (n/a,
+  // empty, the vertex count, the scene's name). The full table is metrics.csv.
   const auto table = metrics_table(results);
-  for (size_t r = 0; r < table.size(); ++r) {
-    h << "<tr>";
-    for (const std::string& cell : table[r]) h << (r ? "<td>" : "<th>") << html_escape(cell) << (r ? "</td>" : "</th>");
+  for (const auto& sc : scenes) {
+    std::vector<size_t> rows;
+    for (size_t r = 1; r < table.size(); ++r)
+      if (results[r - 1].scene == sc.name) rows.push_back(r);
+    std::vector<size_t> cols;
+    for (size_t c = 0; c < table[0].size(); ++c) {
+      bool varies = table[0][c] == "method";
+      for (size_t r : rows) varies = varies || table[r][c] != table[rows[0]][c];
+      if (varies) cols.push_back(c);
+    }
+    h << "<h3>" << html_escape(sc.name) << " (" << html_escape(table[rows.empty() ? 0 : rows[0]][2])
+      << " vertices)</h3>\n<table><tr>";
+    for (size_t c : cols) h << "<th>" << html_escape(table[0][c]) << "</th>";
     h << "</tr>\n";
+    for (size_t r : rows) {
+      h << "<tr class=\"" << to_string(assessments[r - 1].verdict) << "\">";
+      for (size_t c : cols) h << "<td>" << html_escape(table[r][c]) << "</td>";
+      h << "</tr>\n";
+    }
+    h << "</table>\n";
   }
-  h << "</table>\n<p>rigidity: one-ring rotation residual (0 = locally rigid); distortion: |Δh| / max detail "
+  h << "<p>Columns with the same value in every row of an edit are left out (all are in metrics.csv). rigidity: one-ring rotation residual (0 = locally rigid); distortion: |Δh| / max detail "
        "height; self_intersections: intersecting face pairs (CGAL); reference_max / reference_mean: vertex distance to "
        "the reference method's result over its bounding-box diagonal.</p>\n</body></html>\n";
   return h.str();
@@ -283,7 +356,7 @@ void add_compare_command(CLI::App& app) {
   cmd->add_flag("--no-self-intersections", a->no_self_intersections, "Skip the CGAL self-intersection count");
   cmd->add_flag("-q,--quiet", a->quiet, "No progress lines on stderr");
   a->method.add_settings(*cmd);
-  cmd->callback([a] {
+  cmd->callback([a, cmd] {
     const auto start = std::chrono::steady_clock::now();
     ComparisonOptions options;
     if (!a->methods.empty())
@@ -344,7 +417,7 @@ void add_compare_command(CLI::App& app) {
     for (const auto& c : cases) settings.push_back(a->method.method_settings(c));
     const fs::path out(a->output);
     std::error_code ec;
-    for (const char* sub : {"images", "meshes"}) fs::create_directories(out / sub, ec);
+    for (const char* sub : {"images", "meshes", "methods"}) fs::create_directories(out / sub, ec);
     if (ec) throw InvalidInput("compare: cannot create " + (out / "images").string() + ": " + ec.message());
     check_writable((out / "index.html").string(), "-o");  // before any work
 
@@ -431,6 +504,10 @@ void add_compare_command(CLI::App& app) {
     write_file_atomically((out / "metrics.csv").string(), metrics_csv(all));
     write_file_atomically((out / "metrics.md").string(), metrics_markdown(all));
     const std::vector<Assessment> assessments = assess(all);
+    for (const std::string& method : options.methods)
+      write_file_atomically((out / "methods" / (method + ".html")).string(),
+                            method_page_html(builtin_methods().find(method), all, assessments,
+                                             method_options_html(*cmd, method)));
     write_file_atomically((out / "index.html").string(), index_html(all, assessments, scene_outputs, options.methods,
                                                                     options.reference, a->method.settings.base_method));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -535,7 +535,7 @@ TEST_CASE("view axes: CGAL's y-up armadillo stands upright, feet at the bottom o
   }
 }
 
-TEST_CASE("render: vertex colours and highlighted faces paint the surface; bad ones are named",
+TEST_CASE("render: vertex colours and highlighted faces paint the surface, and bad ones are named",
           "[analysis][render]") {
   const Scene s = plane(2000);
   RenderOptions o;

@@ -7,19 +7,10 @@
 set -uo pipefail
 msdeform="$1"
 work="$2"
+source "$(cd "$(dirname "$0")" && pwd)/common.sh"
 rm -rf "$work"
 mkdir -p "$work"
 cd "$work" || exit 1
-fail() { echo "check_cli: FAILED: $*" >&2; exit 1; }
-# expect_error EXIT_CODE TEXT command...: the command exits with EXIT_CODE and prints TEXT on stderr.
-expect_error() {
-  local code="$1" text="$2"
-  shift 2
-  "$@" >out.txt 2>err.txt
-  local got=$?
-  [ "$got" = "$code" ] || { cat err.txt; fail "'$*' exited $got, expected $code"; }
-  grep -qF -- "$text" err.txt || { cat err.txt; fail "'$*' did not say: $text"; }
-}
 "$msdeform" scene lift --resolution 2k -o . >/dev/null || fail "scene lift"
 
 # Paths that cannot even be examined: a symlink loop, a name over 255 bytes.

@@ -9,18 +9,10 @@ msdeform="$1"
 work="$2"
 shared="$3"
 cgal="$4"
+source "$(cd "$(dirname "$0")" && pwd)/common.sh"
 rm -rf "$work"
 mkdir -p "$work"
 cd "$work" || exit 1
-fail() { echo "check_regions: FAILED: $*" >&2; exit 1; }
-expect_error() {
-  local text="$1"
-  shift
-  "$@" >out.txt 2>err.txt
-  local got=$?
-  [ "$got" = 1 ] || { cat err.txt; fail "'$*' exited $got, expected 1"; }
-  grep -qF -- "$text" err.txt || { cat err.txt; fail "'$*' did not say: $text"; }
-}
 "$msdeform" scene lift --resolution 2k -o . >/dev/null || fail "scene lift"
 
 # The same edit built on the command line and read back from the files it wrote gives the same mesh.
@@ -103,11 +95,11 @@ if [ -f "$cgal/armadillo.off" ]; then
   "$msdeform" render "$cgal/armadillo.off" -o armadillo.png --size 160 120 >out.txt 2>&1 || fail "render armadillo"
   grep -q "up +0 +1 +0" out.txt || { cat out.txt; fail "the armadillo is y-up"; }
 fi
-expect_error "--up w: expected auto, x, y, z" "$msdeform" render lift.off --up w -o x.png
-expect_error "--view 1: expected auto or AZ,EL" "$msdeform" render lift.off --view 1 -o x.png
-expect_error "--focus handle: the region has no handle" "$msdeform" render lift.off --focus handle -o x.png
-expect_error "needs a region" "$msdeform" render lift.off --color region -o x.png
-expect_error "the picture is a .png" "$msdeform" render lift.off -o x.jpg
+expect_error 1 "--up w: expected auto, x, y, z" "$msdeform" render lift.off --up w -o x.png
+expect_error 1 "--view 1: expected auto or AZ,EL" "$msdeform" render lift.off --view 1 -o x.png
+expect_error 1 "--focus handle: the region has no handle" "$msdeform" render lift.off --focus handle -o x.png
+expect_error 1 "needs a region" "$msdeform" render lift.off --color region -o x.png
+expect_error 1 "the picture is a .png" "$msdeform" render lift.off -o x.jpg
 
 # Progress on stderr while deform and compare work; none with --quiet.
 "$msdeform" deform lift.off --sel built.sel --def built.def --method multiscale --base-method arap --iterations 3 \
@@ -124,18 +116,18 @@ grep -q "^warning: arap: stopped after 3 iterations" err.txt || { cat err.txt; f
 grep -q "\[2/2, [0-9]* s, about 0 s left\] lift / propagate" err.txt || { cat err.txt; fail "compare progress"; }
 
 # Bad specs are refused by name, before any work.
-expect_error "--handle sphere:1,2,3: 3 numbers given, expected X,Y,Z,R" \
+expect_error 1 "--handle sphere:1,2,3: 3 numbers given, expected X,Y,Z,R" \
   "$msdeform" deform lift.off --handle sphere:1,2,3 --translate 0,0,1 -o x.off
-expect_error "selects no vertex" "$msdeform" deform lift.off --handle sphere:9,9,9,0.01 --translate 0,0,1 -o x.off
-expect_error "the vertex id must be an integer in [0," \
+expect_error 1 "selects no vertex" "$msdeform" deform lift.off --handle sphere:9,9,9,0.01 --translate 0,0,1 -o x.off
+expect_error 1 "the vertex id must be an integer in [0," \
   "$msdeform" deform lift.off --handle vertex:99999999,1 --translate 0,0,1 -o x.off
-expect_error "unknown selection 'cube'" "$msdeform" deform lift.off --handle cube:1 --translate 0,0,1 -o x.off
-expect_error "--rotate 0,0,0,30: the axis is zero" "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,0,0,30 -o x.off
-expect_error "'nan' is not a finite number" "$msdeform" deform lift.off --handle vertex:0,1 --translate nan,0,0 -o x.off
-expect_error "not both" "$msdeform" deform lift.off --sel lift.sel --handle vertex:0,1 --translate 0,0,1 -o x.off
-expect_error "not both" "$msdeform" deform lift.off --sel lift.sel --def lift.def --translate 0,0,1 -o x.off
-expect_error "needs handle transforms" "$msdeform" deform lift.off --handle vertex:0,1 -o x.off
-expect_error "give the group" "$msdeform" deform lift.off --handle file:groups.dmat --translate 0,0,1 -o x.off
-expect_error "is one of the inputs" "$msdeform" deform lift.off --sel lift.sel --def lift.def --write-sel lift.sel -o x.off
+expect_error 1 "unknown selection 'cube'" "$msdeform" deform lift.off --handle cube:1 --translate 0,0,1 -o x.off
+expect_error 1 "--rotate 0,0,0,30: the axis is zero" "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,0,0,30 -o x.off
+expect_error 1 "'nan' is not a finite number" "$msdeform" deform lift.off --handle vertex:0,1 --translate nan,0,0 -o x.off
+expect_error 1 "not both" "$msdeform" deform lift.off --sel lift.sel --handle vertex:0,1 --translate 0,0,1 -o x.off
+expect_error 1 "not both" "$msdeform" deform lift.off --sel lift.sel --def lift.def --translate 0,0,1 -o x.off
+expect_error 1 "needs handle transforms" "$msdeform" deform lift.off --handle vertex:0,1 -o x.off
+expect_error 1 "give the group" "$msdeform" deform lift.off --handle file:groups.dmat --translate 0,0,1 -o x.off
+expect_error 1 "is one of the inputs" "$msdeform" deform lift.off --sel lift.sel --def lift.def --write-sel lift.sel -o x.off
 [ -e x.off ] && fail "a refused run wrote its output"
 echo "check_regions: all passed"

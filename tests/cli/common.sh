@@ -1,0 +1,11 @@
+# Shared by the command-line checks (sourced): fail MESSAGE ends the check; expect_error EXIT_CODE TEXT
+# command... runs the command and fails unless it exits with EXIT_CODE and prints TEXT on stderr.
+fail() { echo "$(basename "$0" .sh): FAILED: $*" >&2; exit 1; }
+expect_error() {
+  local code="$1" text="$2"
+  shift 2
+  "$@" >out.txt 2>err.txt
+  local got=$?
+  [ "$got" = "$code" ] || { cat err.txt; fail "'$*' exited $got, expected $code"; }
+  grep -qF -- "$text" err.txt || { cat err.txt; fail "'$*' did not say: $text"; }
+}

@@ -673,11 +673,7 @@ ViewAxes edit_view_axes(const Positions& P, const std::vector<int>& fixed_vertic
     for (int v : fixed_vertices) fixed += P.row(v).transpose();
     fixed /= static_cast<double>(fixed_vertices.size());
     const Vec3 away = Vec3(P.colwise().mean().transpose()) - fixed;
-    if (away.norm() > 0.1 * bounding_box_diagonal(P)) {
-      Eigen::Index k;
-      away.cwiseAbs().maxCoeff(&k);
-      return view_axes(P, away[k] > 0 ? Vec3(Vec3::Unit(k)) : Vec3(-Vec3::Unit(k)));
-    }
+    if (away.norm() > 0.1 * bounding_box_diagonal(P)) return view_axes(P, nearest_axis(away));
   }
   return view_axes(P, nearest_axis(principal));
 }

@@ -96,9 +96,10 @@ ViewAxes view_axes(const Positions& P);
 //! The same with up given (any non-zero vector; front and side from the extents across it).
 ViewAxes view_axes(const Positions& P, const Vec3& up);
 //! For an edit: a shape that is not flat and whose fixed vertices (indices into P) sit to one side, as
-//! feet or a base do (their centroid more than a tenth of the bounding-box diagonal from the vertices'
-//! centroid), stands on them: up is the signed coordinate axis nearest the direction from them to the
-//! shape. Otherwise view_axes(P).
+//! feet, a base or a head do (their centroid more than a tenth of the bounding-box diagonal from the
+//! vertices' centroid), stands along that side's axis: up is the coordinate axis nearest the direction
+//! from them to the shape, positive (by the authoring convention, so a figure fixed at its head is not
+//! turned upside down). Otherwise view_axes(P).
 ViewAxes edit_view_axes(const Positions& P, const std::vector<int>& fixed_vertices);
 
 //! Ray-traces (P #V×3, F #F×3) into an image of options.width × options.height pixels: a pinhole camera

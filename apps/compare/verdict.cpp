@@ -22,6 +22,7 @@ const char* colour(Verdict v) {
     case Verdict::Fair: return "#c6d64a";
     case Verdict::Poor: return "#f0a030";
     case Verdict::Broken: return "#d9362b";
+    case Verdict::NotJudged: return "#9fb3c8";
     default: return "#9e9e9e";
   }
 }
@@ -30,6 +31,13 @@ std::string escape(const std::string& s) {
   std::string out;
   for (char c : s) out += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
   return out;
+}
+
+// A message for a cell: at most 300 characters, cut at a space.
+std::string shortened(const std::string& text) {
+  if (text.size() <= 300) return text;
+  const size_t cut = text.rfind(' ', 300);
+  return text.substr(0, cut == std::string::npos ? 300 : cut) + " …";
 }
 
 // Results of one scene, by index into `results`, in their order.
@@ -48,6 +56,7 @@ const char* to_string(Verdict v) {
     case Verdict::Fair: return "fair";
     case Verdict::Poor: return "poor";
     case Verdict::Broken: return "broken";
+    case Verdict::NotJudged: return "not-judged";
     default: return "failed";
   }
 }
@@ -68,7 +77,7 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
       const MethodResult& r = results[i];
       Assessment& a = out[i];
       if (!r.ok) {
-        a = {Verdict::Failed, "failed: " + r.error.substr(0, 160), false};
+        a = {Verdict::Failed, shortened(r.error), false};
         continue;
       }
       if (broken(r)) {
@@ -94,16 +103,23 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         else if (d > t.fair_distortion) fair.push_back(text);
         else good.push_back("details kept (" + fmt("%.2g", 100 * d) + " %)");
       }
-      const std::vector<std::string>& why = !poor.empty() ? poor : !fair.empty() ? fair : good;
-      a.verdict = !poor.empty() ? Verdict::Poor : !fair.empty() ? Verdict::Fair : Verdict::Good;
-      for (const std::string& w : why) a.reason += (a.reason.empty() ? "" : "; ") + w;
-      if (a.reason.empty()) a.reason = "no quality measured for this input";
+      if (r.rigidity.count == 0 && r.distortion.count == 0) {
+        a.verdict = Verdict::NotJudged;
+        a.reason = "no rigidity or detail measure for this input" +
+                   (r.not_measured.empty() ? std::string() : " (" + shortened(r.not_measured) + ")");
+      } else {
+        const std::vector<std::string>& why = !poor.empty() ? poor : !fair.empty() ? fair : good;
+        a.verdict = !poor.empty() ? Verdict::Poor : !fair.empty() ? Verdict::Fair : Verdict::Good;
+        for (const std::string& w : why) a.reason += (a.reason.empty() ? "" : "; ") + w;
+        if (!r.warning.empty() && a.verdict == Verdict::Good) a.verdict = Verdict::Fair;
+      }
+      if (!r.warning.empty()) a.reason += "; warning: " + shortened(r.warning);
     }
     // Best: the most rigid unbroken result of the best verdict present, then the least distortion.
     long best = -1;
     for (size_t i : ids) {
       const Assessment& a = out[i];
-      if (a.verdict == Verdict::Failed || a.verdict == Verdict::Broken) continue;
+      if (a.verdict == Verdict::Failed || a.verdict == Verdict::Broken || a.verdict == Verdict::NotJudged) continue;
       if (best < 0) {
         best = static_cast<long>(i);
         continue;
@@ -133,7 +149,8 @@ std::string verdict_summary(const std::vector<MethodResult>& results, const std:
         s << " best " << results[i].method << " (" << assessments[i].reason << "; "
           << fmt("%.3g", results[i].frame_ms) << " ms per frame)";
     s << "\n";
-    for (Verdict v : {Verdict::Good, Verdict::Fair, Verdict::Poor, Verdict::Broken, Verdict::Failed}) {
+    for (Verdict v :
+         {Verdict::Good, Verdict::Fair, Verdict::Poor, Verdict::Broken, Verdict::NotJudged, Verdict::Failed}) {
       std::string names;
       for (size_t i : ids)
         if (assessments[i].verdict == v) names += (names.empty() ? "" : ", ") + results[i].method;

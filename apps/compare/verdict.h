@@ -10,8 +10,9 @@
 
 namespace msd {
 
-enum class Verdict { Good, Fair, Poor, Broken, Failed };
-const char* to_string(Verdict v);  //!< "good", "fair", "poor", "broken", "failed"
+enum class Verdict { Good, Fair, Poor, Broken, NotJudged, Failed };
+//! "good", "fair", "poor", "broken", "not-judged", "failed" (also the page's CSS classes)
+const char* to_string(Verdict v);
 
 //! Thresholds of the verdicts. Rigidity (one-ring rotation residual) is judged against the most rigid
 //! result of the same edit, detail distortion (|Δh| over the largest detail height) absolutely.
@@ -26,9 +27,11 @@ struct Assessment {
   bool best = false;   //!< the edit's best result: the most rigid without broken triangles, then least distortion
 };
 
-//! One assessment per result (same order). Failed: the run threw. Broken: self-intersecting triangle pairs
-//! or triangles folded over a multi-scale base. Poor / fair: rigidity or distortion beyond the thresholds.
-//! Good otherwise. Metrics that were not measured (a point cloud) are not judged.
+//! One assessment per result (same order). Failed: the run threw (the reason is its message). Broken:
+//! self-intersecting triangle pairs or triangles folded over a multi-scale base. Poor / fair: rigidity or
+//! distortion beyond the thresholds. Good otherwise, but at most fair when the method warned (e.g. an
+//! iterative method that did not converge; the warning is part of the reason). Not judged: neither
+//! rigidity nor detail distortion could be measured (a point cloud), never the best.
 std::vector<Assessment> assess(const std::vector<MethodResult>& results, const VerdictThresholds& t = {});
 
 //! A few lines for the terminal: per edit, the best result and why, then the methods by verdict.

@@ -169,10 +169,12 @@ std::string method_options_html(const CLI::App& cmd, const std::string& method) 
       continue;  // a method without options of its own (gradient)
     }
     h << "<h3>" << html_escape(g->get_description()) << "</h3>\n<table>";
-    for (const CLI::Option* o : g->get_options())
+    for (const CLI::Option* o : g->get_options()) {
+      if (o->get_name() == "--help" || o->get_name() == "--help-all" || o->get_name().empty()) continue;
       h << "<tr><td>" << html_escape(o->get_name()) << "</td><td>" << html_escape(o->get_description())
         << (o->get_default_str().empty() ? "" : " (default " + html_escape(o->get_default_str()) + ")")
         << "</td></tr>\n";
+    }
     h << "</table>\n";
   }
   const std::string options = h.str();
@@ -187,7 +189,8 @@ std::string method_page_html(const MethodEntry& entry, const std::vector<MethodR
     << "</title>\n<style>body{font-family:sans-serif;margin:1.5em}table{border-collapse:collapse;font-size:13px}"
        "td,th{border:1px solid #bbb;padding:3px 6px;vertical-align:top}img{width:320px;border:1px solid #ccc}"
        ".good{background:#d8f0d0}.fair{background:#eef3c0}.poor{background:#fbe0b8}.broken{background:#f6c4c0}"
-       ".failed{background:#e0e0e0}</style></head><body>\n<p><a href=\"../index.html\">all methods</a></p>\n<h1>"
+       ".failed{background:#e0e0e0}.not-judged{background:#dfe7f0}</style></head><body>\n<p><a href=\"../index.html\">"
+       "all methods</a></p>\n<h1>"
     << html_escape(entry.name) << "</h1>\n<p>Seed section " << html_escape(entry.section) << ": "
     << html_escape(entry.summary) << "</p>\n<h2>On the edits of this comparison</h2>\n<table><tr>";
   std::ostringstream cells;
@@ -219,7 +222,9 @@ std::string verdicts_html(const std::vector<MethodResult>& results, const std::v
     << t.fair_rigidity << "× the edit's most rigid result, or details changed by over " << 100 * t.fair_distortion
     << " % of their height), <span class=\"poor\">poor</span> (over " << t.poor_rigidity << "×, or "
     << 100 * t.poor_distortion << " %), <span class=\"broken\">broken</span> (self-intersecting triangles, or "
-       "triangles folded over a multi-scale base), <span class=\"failed\">failed</span> (with its message). "
+       "triangles folded over a multi-scale base), <span class=\"not-judged\">not judged</span> (no rigidity or "
+       "detail measure, e.g. a point cloud), <span class=\"failed\">failed</span> (with its message); a method "
+       "that warned (e.g. did not converge) is at most fair, and says why. "
        "★ marks the best of each edit: the most rigid without broken triangles, then the least detail change.</p>\n"
        "<table class=\"verdicts\"><tr><th></th>";
   for (const auto& sc : scenes) h << "<th>" << html_escape(sc.name) << "</th>";
@@ -252,7 +257,8 @@ std::string index_html(const std::vector<MethodResult>& results, const std::vect
        "td:nth-child(-n+2){text-align:left}img{width:320px;border:1px solid #ccc}"
        ".grid td{text-align:center;vertical-align:top;font-size:12px}.verdicts td{text-align:left;font-size:12px;"
        "max-width:16em}.verdict{margin:2px 0}.good{background:#d8f0d0}.fair{background:#eef3c0}"
-       ".poor{background:#fbe0b8}.broken{background:#f6c4c0}.failed{background:#e0e0e0}svg{display:block;"
+       ".poor{background:#fbe0b8}.broken{background:#f6c4c0}.failed{background:#e0e0e0}.not-judged{background:#dfe7f0}"
+       "svg{display:block;"
        "margin:4px 0}</style></head><body>\n"
        "<h1>msdeform: methods and detail encodings compared</h1>\n"
        "<p>Pictures: colour is the change of the detail heights (normal displacements over a faired base, seed 9.3) against "

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <tuple>
 
 #include "msdeform/core/atomic_file.h"
 #include "msdeform/core/errors.h"
@@ -45,6 +46,7 @@ void EditCaseOptions::check_output(const std::string& output, const char* option
                          ".off and .obj keep them\n", option, output.c_str());
   if (force) return;
   std::vector<std::string> inputs = {mesh, sel, def};
+  for (const std::string& f : region.input_files()) inputs.push_back(f);
   inputs.insert(inputs.end(), other_inputs.begin(), other_inputs.end());
   for (const std::string& input : inputs)
     if (!input.empty() && same_file(output, input))
@@ -53,10 +55,16 @@ void EditCaseOptions::check_output(const std::string& output, const char* option
 }
 
 EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {
-  for (const auto& [path, option] : {std::pair{region.write_sel, "--write-sel"}, {region.write_def, "--write-def"}}) {
+  std::vector<std::string> inputs = {mesh, sel, def};
+  for (const std::string& f : region.input_files()) inputs.push_back(f);
+  for (const auto& [path, option, ext] : {std::tuple{region.write_sel, "--write-sel", ".sel"},
+                                          {region.write_def, "--write-def", ".def"}}) {
     if (path.empty()) continue;
+    if (file_extension(path) != ext)
+      throw InvalidInput(std::string(option) + " " + path + ": the file is written in the " + ext + " format; name it " +
+                         "NAME" + ext);
     check_writable(path, option);
-    for (const std::string& input : {mesh, sel, def})
+    for (const std::string& input : inputs)
       if (!force && !input.empty() && same_file(path, input))
         throw InvalidInput(std::string(option) + " " + path + " is one of the inputs; it would be replaced. Write "
                            "elsewhere, or give --force");

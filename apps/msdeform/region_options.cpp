@@ -1,9 +1,9 @@
 #include "apps/msdeform/region_options.h"
 
-#include <cerrno>
 #include <cstdio>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <map>
 
 #include "msdeform/core/adjacency.h"
@@ -25,9 +25,8 @@ std::vector<double> numbers(const std::string& where, const std::string& text, s
     const size_t comma = text.find(',', at);
     const std::string item = text.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
     char* end = nullptr;
-    errno = 0;
-    const double x = std::strtod(item.c_str(), &end);
-    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(x) || errno == ERANGE)
+    const double x = std::strtod(item.c_str(), &end);  // overflow gives ±inf; underflow a finite tiny value
+    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(x))
       throw InvalidInput(where + ": '" + item + "' is not a finite number (expected " + what + ")");
     out.push_back(x);
     if (comma == std::string::npos) break;
@@ -63,6 +62,7 @@ std::vector<int> select(const std::string& option, const std::string& spec, cons
   }
   if (kind == "sphere") {
     const auto v = numbers(where, args, {4}, "X,Y,Z,R");
+    if (v[3] < 0) throw InvalidInput(where + ": the radius is negative");
     return select_sphere(P, vec(v), v[3]);
   }
   if (kind == "halfspace") {
@@ -87,16 +87,25 @@ std::vector<int> select(const std::string& option, const std::string& spec, cons
     long value = 0;
     if (comma != std::string::npos) {  // file:PATH,VALUE (a path may hold commas: only a number counts)
       char* end = nullptr;
-      const std::string tail = args.substr(comma + 1);
+      const std::string tail = args.substr(comma + 1), head = args.substr(0, comma);
       const long x = std::strtol(tail.c_str(), &end, 10);
-      if (!tail.empty() && *end == '\0') path = args.substr(0, comma), value = x, by_value = true;
+      if (!tail.empty() && *end == '\0')
+        path = head, value = x, by_value = true;
+      else if (!std::filesystem::exists(args) && std::filesystem::exists(head))
+        throw InvalidInput(where + ": the value after the file, '" + tail + "', is not an integer (a .sel code or "
+                           "a .dmat group)");
     }
     if (path.empty()) throw InvalidInput(where + ": no file given (file:PATH or file:PATH,VALUE)");
     const bool dmat = file_extension(path) == ".dmat";
     if (dmat && !by_value)
       throw InvalidInput(where + ": a .dmat file holds groups, not fixed and handle vertices: give the group, e.g. "
                          "file:" + path + ",0");
-    const Region r = dmat ? read_dmat_groups(path, nv) : read_sel(path, nv);
+    Region r;
+    try {
+      r = dmat ? read_dmat_groups(path, nv) : read_sel(path, nv);
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(where + ": " + e.what());
+    }
     std::vector<int> out;
     for (int i = 0; i < nv; ++i) {
       const int code = r.code(i);
@@ -127,7 +136,8 @@ void RegionOptions::add_to(CLI::App& cmd) {
   rotate_ = add("--rotate", rotate_values_, "AX,AY,AZ,DEG", "Rotate by DEG degrees about the axis, like --translate");
   scale_ = add("--scale", scale_values_, "S|SX,SY,SZ", "Scale, like --translate");
   about_ = add("--about", about_values_, "X,Y,Z|handle-centroid",
-               "Centre of the rotations and scales that follow (default: the handle's centroid, moved by the transforms before)");
+               "Centre of the --rotate or --scale right before it (default: the handle's centroid where the "
+               "transforms before put it)");
   g->add_option("--write-sel", write_sel, "Save the region (built or loaded) as a .sel file");
   g->add_option("--write-def", write_def, "Save the handle transforms (built or loaded) as a .def file");
 }
@@ -135,7 +145,21 @@ void RegionOptions::add_to(CLI::App& cmd) {
 bool RegionOptions::builds_region() const { return fixed_ && (fixed_->count() > 0 || handle_->count() > 0); }
 
 bool RegionOptions::builds_transforms() const {
-  return translate_ && (translate_->count() > 0 || rotate_->count() > 0 || scale_->count() > 0);
+  return translate_ &&
+         (translate_->count() > 0 || rotate_->count() > 0 || scale_->count() > 0 || about_->count() > 0);
+}
+
+std::vector<std::string> RegionOptions::input_files() const {
+  std::vector<std::string> files;
+  for (const std::vector<std::string>* specs : {&fixed_values_, &handle_values_})
+    for (const std::string& spec : *specs) {
+      if (spec.rfind("file:", 0) != 0) continue;
+      const std::string args = spec.substr(5);
+      files.push_back(args);
+      const size_t comma = args.rfind(',');
+      if (comma != std::string::npos) files.push_back(args.substr(0, comma));  // file:PATH,VALUE
+    }
+  return files;
 }
 
 std::vector<RegionOptions::Step> RegionOptions::steps() const {
@@ -150,23 +174,32 @@ std::vector<RegionOptions::Step> RegionOptions::steps() const {
 
 Region RegionOptions::build_region(const Positions& P, const Faces& F) const {
   Region region(static_cast<int>(P.rows()), Region::kFree);
-  int handles = 0;
+  std::vector<std::string> handle_specs;
+  bool any_fixed = false;
+  std::string fixed_specs;
   for (const Step& s : steps()) {
     if (s.option != fixed_ && s.option != handle_) continue;
     const bool handle = s.option == handle_;
-    const std::string option = handle ? "--handle" : "--fixed";
-    const std::vector<int> vertices = select(option, s.value, P, F, handle);
+    const std::string option = (handle ? "--handle " : "--fixed ") + s.value;
+    const std::vector<int> vertices = select(handle ? "--handle" : "--fixed", s.value, P, F, handle);
     if (vertices.empty())
-      throw InvalidInput(option + " " + s.value + " selects no vertex" +
-                         (handle ? " (handle " + std::to_string(handles) + ")" : std::string()));
-    if (handle)
-      region.set_handle(vertices, handles++);
-    else
+      throw InvalidInput(option + " selects no vertex" +
+                         (handle ? " (it would be handle " + std::to_string(handle_specs.size()) + ")" : std::string()));
+    if (handle) {
+      region.set_handle(vertices, static_cast<int>(handle_specs.size()));
+      handle_specs.push_back(option);
+    } else {
       region.set_fixed(vertices);
+      any_fixed = true;
+      fixed_specs += (fixed_specs.empty() ? "" : ", ") + option;
+    }
   }
-  for (int k = 0; k < handles; ++k)
-    if (region.handle_vertices(k).empty())
-      throw InvalidInput("--handle number " + std::to_string(k + 1) + " lost all its vertices to later selections");
+  for (size_t k = 0; k < handle_specs.size(); ++k)
+    if (region.handle_vertices(static_cast<int>(k)).empty())
+      throw InvalidInput(handle_specs[k] + " (handle " + std::to_string(k) +
+                         ") lost all its vertices to later selections");
+  if (any_fixed && region.fixed_vertices().empty())
+    throw InvalidInput(fixed_specs + ": every fixed vertex was taken by a later --handle");
   return region;
 }
 
@@ -180,20 +213,18 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
     if (!vertices.empty()) centroid[k] /= static_cast<double>(vertices.size());
   }
   int current = -1;  // the handle the next transforms move; -1: all of them
-  bool has_about = false;
-  Vec3 about = Vec3::Zero();
-  for (const Step& s : steps()) {
+  const std::vector<Step> all = steps();
+  for (size_t i = 0; i < all.size(); ++i) {
+    const Step& s = all[i];
     if (s.option == fixed_) continue;
     if (s.option == handle_) {
-      ++current, has_about = false;
+      ++current;
       continue;
     }
     const std::string option = s.option->get_name() + " " + s.value;
-    if (s.option == about_) {
-      has_about = s.value != "handle-centroid";
-      if (has_about) about = vec(numbers(option, s.value, {3}, "X,Y,Z or handle-centroid"));
-      continue;
-    }
+    if (s.option == about_)  // read with the --rotate or --scale before it
+      throw InvalidInput(option + " follows no --rotate or --scale: it names the centre of the one it follows, "
+                         "e.g. --rotate 0,0,1,45 --about 1,2,3");
     if (current >= nh)
       throw InvalidInput(option + " follows handle " + std::to_string(current) +
                          ", which the region does not have (" + std::to_string(nh) + " handle(s))");
@@ -209,6 +240,14 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
       const Vec3 factors = v.size() == 1 ? Vec3::Constant(v[0]) : vec(v);
       if (!(factors.array().abs() > 0).all()) throw InvalidInput(option + ": a scale factor is zero");
       M.topLeftCorner<3, 3>() = factors.asDiagonal();
+    }
+    // A rotation or scale is about the point of the --about right after it, else the handle's centroid.
+    bool has_about = false;
+    Vec3 about = Vec3::Zero();
+    if (s.option != translate_ && i + 1 < all.size() && all[i + 1].option == about_) {
+      const Step& next = all[++i];
+      has_about = next.value != "handle-centroid";
+      if (has_about) about = vec(numbers("--about " + next.value, next.value, {3}, "X,Y,Z or handle-centroid"));
     }
     for (int k = (current < 0 ? 0 : current); k < (current < 0 ? nh : current + 1); ++k) {
       const Vec3 c = has_about ? about : transform_point(T[k], centroid[k]);  // where the handle is now

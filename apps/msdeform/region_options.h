@@ -5,10 +5,10 @@
 //     vertex:ID,RINGS (the vertex and RINGS rings of neighbours)
 //     file:PATH (a .sel: its fixed vertices for --fixed, its handle vertices for --handle)
 //     file:PATH,VALUE (the vertices with that value: a .sel code or a .dmat group)
-//   --translate X,Y,Z   --rotate AX,AY,AZ,DEGREES   --scale S or SX,SY,SZ   --about X,Y,Z|handle-centroid
+//   --translate X,Y,Z   --rotate AX,AY,AZ,DEGREES [--about X,Y,Z|handle-centroid]   --scale S|SX,SY,SZ [--about ...]
 //     composed in the order given; a transform after --handle k moves handle k, one before any --handle
-//     moves every handle. Rotations and scales are about the handle's centroid where the transforms before
-//     put it, unless --about (which holds for the transforms after it, up to the next --handle) names a point.
+//     moves every handle. A rotation or scale is about the point of the --about right after it, else about
+//     the handle's centroid where the transforms before put it.
 //   --write-sel PATH / --write-def PATH save the region and transforms built, for other tools.
 
 #include <string>
@@ -25,7 +25,8 @@ struct RegionOptions {
 
   void add_to(CLI::App& cmd);
   bool builds_region() const;      // a --fixed or --handle was given
-  bool builds_transforms() const;  // a --translate, --rotate or --scale was given
+  bool builds_transforms() const;  // a --translate, --rotate, --scale or --about was given
+  std::vector<std::string> input_files() const;  // the files of file: selections (never to be overwritten)
   // The region of P (faces F for vertex rings) from the selections. \throw InvalidInput naming the
   // option and its value: malformed numbers, an id out of range, a selection that selects nothing.
   Region build_region(const Positions& P, const Faces& F) const;

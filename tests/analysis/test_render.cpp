@@ -484,6 +484,11 @@ TEST_CASE("view axes: a flat shape is seen from above, others stand along their 
     if (bar.P(v, 2) < -0.13) below.push_back(v);
   REQUIRE(!below.empty());
   CHECK(edit_view_axes(bar.P, below).up == Vec3::UnitZ());
+  // Fixed at its top (the x = 1 end, like a figure held by its head) it still stands along +x, not upside down.
+  std::vector<int> top;
+  for (int v = 0; v < bar.P.rows(); ++v)
+    if (bar.P(v, 0) > 0.9) top.push_back(v);
+  CHECK(edit_view_axes(bar.P, top).up == Vec3::UnitX());
   // A fixed part around the middle gives no direction: the principal axes decide.
   std::vector<int> all(bar.P.rows());
   for (int v = 0; v < bar.P.rows(); ++v) all[v] = v;

@@ -129,5 +129,21 @@ expect_error 1 "not both" "$msdeform" deform lift.off --sel lift.sel --def lift.
 expect_error 1 "needs handle transforms" "$msdeform" deform lift.off --handle vertex:0,1 -o x.off
 expect_error 1 "give the group" "$msdeform" deform lift.off --handle file:groups.dmat --translate 0,0,1 -o x.off
 expect_error 1 "is one of the inputs" "$msdeform" deform lift.off --sel lift.sel --def lift.def --write-sel lift.sel -o x.off
+expect_error 1 "the radius is negative" "$msdeform" deform lift.off --handle sphere:0.5,0.5,0,-1 --translate 0,0,1 -o x.off
+expect_error 1 "--about 0,0,0 follows no --rotate or --scale" \
+  "$msdeform" deform lift.off --about 0,0,0 --handle vertex:0,1 --rotate 0,0,1,90 -o x.off
+# --about names the centre of the rotation it follows: the point stays where it is.
+"$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,0,1,90 --about 1,0,0 --write-def about.def \
+  --method shell -o about.off >/dev/null 2>&1 || fail "--rotate ... --about"
+[ "$(grep -v '^#' about.def | head -2 | awk '{printf "%.6f ", $4}')" = "1.000000 -1.000000 " ] ||
+  { cat about.def; fail "--about: the rotation is not about (1, 0, 0)"; }
+expect_error 1 "every fixed vertex was taken by a later --handle" \
+  "$msdeform" deform lift.off --fixed vertex:0,1 --handle vertex:0,2 --translate 0,0,1 -o x.off
+expect_error 1 "name it NAME.sel" "$msdeform" deform lift.off --sel lift.sel --def lift.def --write-sel out.dmat -o x.off
+cp lift.sel mine.sel
+expect_error 1 "is one of the inputs" \
+  "$msdeform" deform lift.off --handle file:mine.sel --translate 0,0,1 --write-sel mine.sel -o x.off
+cmp -s mine.sel lift.sel || fail "a file: input was replaced"
+expect_error 1 "is not an integer" "$msdeform" deform lift.off --handle file:lift.sel,abc --translate 0,0,1 -o x.off
 [ -e x.off ] && fail "a refused run wrote its output"
 echo "check_regions: all passed"

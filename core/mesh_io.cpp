@@ -25,6 +25,7 @@ namespace {
 // A file's vertices and polygons as read, with the source line of every polygon for error messages.
 struct FileContents {
   std::vector<Vec3> points;
+  std::vector<double> vertex_property;  // PLY: the values of the property asked for (PlyReader)
   std::vector<int> corners, offsets{0}, lines;
   int first_ignored_line = 0;  // OFF and ASCII PLY: the first line of data after the header's counts
 };
@@ -236,8 +237,9 @@ FileContents read_obj(std::string_view text, const std::string& path, const std:
 // skipped. Our own reader because OpenMesh's stores coordinates in single precision.
 class PlyReader {
  public:
-  PlyReader(std::string_view text, std::string path, std::string who)
-      : text_(text), path_(std::move(path)), who_(std::move(who)) {}
+  // property: the name of a vertex property whose values read() keeps (empty: none).
+  PlyReader(std::string_view text, std::string path, std::string who, std::string property = {})
+      : text_(text), path_(std::move(path)), who_(std::move(who)), property_(std::move(property)) {}
 
   FileContents read() {
     parse_header();
@@ -252,6 +254,7 @@ class PlyReader {
           if (prop.list_count_type.empty()) {
             const double x = value(prop.type);
             if (e.name == "vertex" && prop.coordinate >= 0) p[prop.coordinate] = x;
+            if (e.name == "vertex" && !property_.empty() && prop.name == property_) soup.vertex_property.push_back(x);
             continue;
           }
           const double n = value(prop.list_count_type);  // an integer type (parse_header)
@@ -282,6 +285,14 @@ class PlyReader {
     if (!binary_) {
       skip_space();
       if (pos_ < text_.size()) soup.first_ignored_line = line_;
+    }
+    if (!property_.empty() && soup.vertex_property.size() != soup.points.size()) {
+      std::string names;
+      for (const Element& e : elements_)
+        if (e.name == "vertex")
+          for (const Property& prop : e.props) names += (names.empty() ? "" : ", ") + prop.name;
+      throw InvalidInput(who_ + ": " + path_ + " has no vertex property '" + printable(property_.substr(0, 60)) +
+                         "' (its vertex properties: " + names + ")");
     }
     return soup;
   }
@@ -498,6 +509,7 @@ class PlyReader {
 
   std::string_view text_;
   std::string path_, who_;
+  std::string property_;  // a vertex property read() keeps the values of
   size_t pos_ = 0;
   int line_ = 0;
   bool binary_ = false;
@@ -679,6 +691,18 @@ void append_point(std::string& out, const Positions& P, Eigen::Index i) {
 }
 
 }  // namespace
+
+Eigen::VectorXd load_vertex_property(const std::string& path, const std::string& name) {
+  const std::string who = "load_vertex_property";
+  if (file_extension(path) != ".ply")
+    throw InvalidInput(who + ": " + path + ": per-vertex properties are read from PLY files");
+  if (name.empty()) throw InvalidInput(who + ": no property name given");
+  const FileText file(path, who.c_str());
+  const FileContents contents = PlyReader(file.text(), path, who, name).read();
+  if (contents.points.empty()) throw InvalidInput(who + ": " + path + " has no vertices");
+  return Eigen::Map<const Eigen::VectorXd>(contents.vertex_property.data(),
+                                           static_cast<Eigen::Index>(contents.vertex_property.size()));
+}
 
 std::string file_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();

@@ -59,6 +59,12 @@ struct SaveOptions {
 void save_mesh(const Positions& P, const Faces& F, const std::string& path, const SaveOptions& options = {});
 void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& options = {});
 
+//! The values of a PLY file's per-vertex property `name` (#V, in the file's vertex order), e.g. the
+//! 'detail' heights `msdeform decompose` writes or the 'detail_change' of `msdeform compare`'s meshes.
+//! \throw InvalidInput for a file that is not PLY or does not read (as load_soup), or a vertex element
+//! without that property (naming the properties it has).
+Eigen::VectorXd load_vertex_property(const std::string& path, const std::string& name);
+
 //! Lower-case extension of path including the dot ("" if none).
 std::string file_extension(const std::string& path);
 

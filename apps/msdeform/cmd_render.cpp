@@ -4,6 +4,7 @@
 #include "apps/msdeform/camera_options.h"
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/edit_case.h"
+#include "msdeform/analysis/metrics.h"
 #include "msdeform/analysis/self_intersections.h"
 #include "msdeform/core/atomic_file.h"
 #include "msdeform/core/errors.h"
@@ -24,11 +25,15 @@ void add_render_command(CLI::App& app) {
   auto detail_scale = std::make_shared<double>(0);
   edit->add_to(*cmd);
   camera->add_to(*cmd);
+  auto rest = std::make_shared<std::string>();
   cmd->add_option("--color", *color,
                   "auto (region when one is given), region (fixed blue, free clay, handles red, green, ...), detail "
-                  "(signed height over a low-pass base), selfint (self-intersecting triangles in red), none")
-      ->check(CLI::IsMember({"auto", "region", "detail", "selfint", "none"}))
+                  "(signed height over a low-pass base), selfint (self-intersecting triangles in red), rigidity (the "
+                  "one-ring rotation residual against --rest), none, or a PLY vertex property: its name, or property:NAME "
+                  "for one named like the above (e.g. property:detail from decompose, detail_change from compare's "
+                  "meshes)")
       ->capture_default_str();
+  cmd->add_option("--rest", *rest, "--color rigidity: the rest shape (same vertices and faces, e.g. the input of deform)");
   cmd->add_option("--detail-scale", *detail_scale, "--color detail: the low-pass detail scale (0: automatic)")
       ->check(CLI::Range(0.0, 1e300));
   cmd->add_option("--size", *size, "Width and height in pixels")->expected(2)->check(CLI::Range(16, 8192));
@@ -62,6 +67,16 @@ void add_render_command(CLI::App& app) {
       o.scalar_label = "detail height";
       std::printf("details over a low-pass base at scale %.4g: heights in [%.4g, %.4g]\n", report.detail_scale,
                   heights.minCoeff(), heights.maxCoeff());
+    } else if (mode == "rigidity") {
+      if (rest->empty()) throw InvalidInput("--color rigidity measures against a rest shape: give --rest REST");
+      const TriangleSoup r = load_soup(*rest);
+      if (r.P.rows() != c.P.rows())
+        throw InvalidInput("--rest " + *rest + " has " + std::to_string(r.P.rows()) + " vertices, " + c.name +
+                           " has " + std::to_string(c.P.rows()));
+      heights = rigidity_error(r.P, c.P, c.F).per_vertex;
+      o.vertex_scalar = &heights;
+      o.scalar_label = "rigidity";
+      std::printf("rigidity against %s: mean %.4g, max %.4g\n", rest->c_str(), heights.mean(), heights.maxCoeff());
     } else if (mode == "selfint") {
       require_surface(c, "render --color selfint");
       std::vector<std::pair<int, int>> pairs;
@@ -72,6 +87,13 @@ void add_render_command(CLI::App& app) {
           for (int k = 0; k < 3; ++k) colors.row(c.F(face, k)) << 0.9, 0.05, 0.05;
       o.vertex_colors = &colors;
       std::printf("self-intersecting triangle pairs: %d (drawn in red)\n", n);
+    } else if (mode != "none") {  // a PLY vertex property: NAME, or property:NAME for one named like a mode
+      const std::string name = mode.rfind("property:", 0) == 0 ? mode.substr(9) : mode;
+      if (c.path.empty()) throw InvalidInput("--color " + mode + ": a built-in scene has no vertex properties");
+      heights = load_vertex_property(c.path, name);
+      o.vertex_scalar = &heights;
+      o.scalar_label = name;
+      std::printf("%s: values in [%.4g, %.4g]\n", name.c_str(), heights.minCoeff(), heights.maxCoeff());
     }
     render_png(c.P, c.F, *output, o);
     std::printf("wrote %s (%dx%d, up %+.0f %+.0f %+.0f)\n", output->c_str(), o.width, o.height, o.up.x(), o.up.y(),

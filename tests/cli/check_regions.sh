@@ -88,7 +88,17 @@ grep -q "self-intersecting triangle pairs: 0" out.txt || { cat out.txt; fail "re
 "$msdeform" render lift.off --color detail --size 160 120 -o detail.png >/dev/null 2>&1 || fail "render --color detail"
 "$msdeform" deform lift.off --sel built.sel --def built.def --method shell -o drawn.off --render drawn.png --up z \
   >/dev/null 2>&1 || fail "deform --render"
-for png in region.png selfint.png detail.png drawn.png; do
+"$msdeform" decompose lift.off -o base.ply >/dev/null 2>&1 || fail "decompose"
+"$msdeform" render base.ply --color property:detail --size 160 120 -o property.png >out.txt 2>&1 ||
+  { cat out.txt; fail "render --color property:detail"; }
+grep -q "^detail: values in" out.txt || { cat out.txt; fail "render: the PLY property"; }
+"$msdeform" render drawn.off --rest lift.off --color rigidity --size 160 120 -o rigidity.png >out.txt 2>&1 ||
+  { cat out.txt; fail "render --color rigidity"; }
+grep -q "^rigidity against lift.off: mean" out.txt || { cat out.txt; fail "render: rigidity"; }
+expect_error 1 "give --rest REST" "$msdeform" render drawn.off --color rigidity -o x.png
+expect_error 1 "has no vertex property 'nosuch' (its vertex properties: x, y, z, detail)" \
+  "$msdeform" render base.ply --color nosuch -o x.png
+for png in region.png selfint.png detail.png drawn.png property.png rigidity.png; do
   [ "$(head -c 8 "$png" | od -An -tx1 | tr -d ' ')" = "89504e470d0a1a0a" ] || fail "$png is not a PNG"
 done
 if [ -f "$cgal/armadillo.off" ]; then

@@ -546,3 +546,31 @@ TEST_CASE("saving is atomic: a failed save leaves the old file untouched", "[cor
   for (const auto& e : std::filesystem::directory_iterator(tmp.path)) files += e.is_regular_file();
   CHECK(files == 1);
 }
+
+TEST_CASE("PLY vertex properties read back by name, ASCII and binary", "[core][io]") {
+  test::TempDir dir;
+  Positions P(4, 3);
+  P << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1;
+  Faces F(2, 3);
+  F << 0, 1, 2, 0, 2, 3;
+  Eigen::VectorXd h(4);
+  h << 0.5, -1.25, 1e-300, 3;
+  SaveOptions save;
+  save.vertex_scalar = &h;
+  save.scalar_name = "detail";
+  const std::string path = dir.file("m.ply");
+  save_mesh(P, F, path, save);
+  CHECK(load_vertex_property(path, "detail") == h);
+  CHECK(load_vertex_property(path, "x") == P.col(0));
+  CHECK_THROWS_WITH(load_vertex_property(path, "quality"),
+                    Contains("has no vertex property 'quality'") && Contains("x, y, z, detail"));
+  // Binary: a float property between the coordinates.
+  const std::string binary = dir.write("b.ply", std::string("ply\nformat binary_little_endian 1.0\nelement vertex 2\n"
+                                                            "property float x\nproperty float h\nproperty float y\n"
+                                                            "property float z\nend_header\n") +
+                                                    std::string(32, '\0'));  // 2 vertices of 4 floats
+  CHECK(load_vertex_property(binary, "h") == Eigen::Vector2d::Zero());
+  save_mesh(P, F, dir.file("m.off"));
+  CHECK_THROWS_WITH(load_vertex_property(dir.file("m.off"), "detail"), Contains("read from PLY files"));
+  CHECK_THROWS_WITH(load_vertex_property(path, ""), Contains("no property name"));
+}

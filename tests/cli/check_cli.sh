@@ -8,10 +8,7 @@ set -uo pipefail
 msdeform="$1"
 work="$2"
 source "$(cd "$(dirname "$0")" && pwd)/common.sh"
-rm -rf "$work"
-mkdir -p "$work"
-cd "$work" || exit 1
-"$msdeform" scene lift --resolution 2k -o . >/dev/null || fail "scene lift"
+start_in "$work"
 
 # Paths that cannot even be examined: a symlink loop, a name over 255 bytes.
 ln -s loop-b.off loop-a.off

@@ -10,10 +10,7 @@ work="$2"
 shared="$3"
 cgal="$4"
 source "$(cd "$(dirname "$0")" && pwd)/common.sh"
-rm -rf "$work"
-mkdir -p "$work"
-cd "$work" || exit 1
-"$msdeform" scene lift --resolution 2k -o . >/dev/null || fail "scene lift"
+start_in "$work"
 
 # The same edit built on the command line and read back from the files it wrote gives the same mesh.
 "$msdeform" deform lift.off --fixed halfspace:1,0,0,0.2 --handle box:0.7,-1,-1,2,2,2 --translate 0,0,0.3 \

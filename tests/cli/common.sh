@@ -9,3 +9,11 @@ expect_error() {
   [ "$got" = "$code" ] || { cat err.txt; fail "'$*' exited $got, expected $code"; }
   grep -qF -- "$text" err.txt || { cat err.txt; fail "'$*' did not say: $text"; }
 }
+# start_in DIR: an empty DIR as the working folder, holding the built-in lift scene (lift.off/.sel/.def)
+# made by $msdeform.
+start_in() {
+  rm -rf "$1"
+  mkdir -p "$1"
+  cd "$1" || exit 1
+  "$msdeform" scene lift --resolution 2k -o . >/dev/null || fail "scene lift"
+}

@@ -91,7 +91,7 @@ struct ViewAxes {
   Vec3 direction(double azimuth_degrees, double elevation_degrees) const;
   Vec3 default_direction() const { return -0.6 * side - front + 0.8 * up; }
 };
-//! 	hrow InvalidInput for no vertices or a non-finite coordinate.
+//! \throw InvalidInput for no vertices or a non-finite coordinate.
 ViewAxes view_axes(const Positions& P);
 //! The same with up given (any non-zero vector; front and side from the extents across it).
 ViewAxes view_axes(const Positions& P, const Vec3& up);

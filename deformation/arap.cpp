@@ -2,9 +2,9 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
-#include <cstdio>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "msdeform/core/errors.h"

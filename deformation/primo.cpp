@@ -1,9 +1,9 @@
 #include "msdeform/deformation/primo.h"
 
 #include <algorithm>
-#include <cstdio>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 #include "msdeform/core/errors.h"

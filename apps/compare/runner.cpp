@@ -116,7 +116,9 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
       if (options.self_intersections && has_faces) {
         if (self_intersections_refused.empty()) {
           try {
-            r.self_intersections = count_self_intersections(r.result, F);
+            std::vector<std::pair<int, int>> pairs;
+            r.self_intersections = count_self_intersections(r.result, F, &pairs);
+            for (const auto& [f, g] : pairs) r.self_intersecting_faces.push_back(f), r.self_intersecting_faces.push_back(g);
           } catch (const InvalidInput& e) {
             self_intersections_refused = e.what();  // the faces, as the result is finite: so for every result
           } catch (const std::exception& e) {

@@ -27,12 +27,6 @@ const char* colour(Verdict v) {
   }
 }
 
-std::string escape(const std::string& s) {
-  std::string out;
-  for (char c : s) out += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
-  return out;
-}
-
 // A message for a cell: at most 300 characters, cut at a space.
 std::string shortened(const std::string& text) {
   if (text.size() <= 300) return text;
@@ -49,6 +43,12 @@ std::vector<size_t> of_scene(const std::vector<MethodResult>& results, const std
 }
 
 }  // namespace
+
+std::string html_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) out += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
+  return out;
+}
 
 const char* to_string(Verdict v) {
   switch (v) {
@@ -186,7 +186,7 @@ std::string edit_charts_svg(const std::vector<MethodResult>& results, const std:
     const MethodResult& r = results[ids[row]];
     const int y = top + row_h * static_cast<int>(row);
     s << "<text x=\"" << label_w - 6 << "\" y=\"" << y + 12 << "\" text-anchor=\"end\">"
-      << (assessments[ids[row]].best ? "★ " : "") << escape(r.method) << "</text>\n";
+      << (assessments[ids[row]].best ? "★ " : "") << html_escape(r.method) << "</text>\n";
   }
   for (int p = 0; p < 4; ++p) {
     const Panel& panel = panels[p];
@@ -247,7 +247,7 @@ std::string edit_charts_svg(const std::vector<MethodResult>& results, const std:
       if (!r.ok || r.frame_ms <= 0 || r.rigidity.count == 0) continue;
       const double x = px(r.frame_ms), y = py(r.rigidity.mean);
       s << "<circle cx=\"" << x << "\" cy=\"" << y << "\" r=\"4\" fill=\"" << colour(assessments[i].verdict)
-        << "\" stroke=\"#333\"/><text x=\"" << x + 6 << "\" y=\"" << y + 4 << "\">" << escape(r.method) << "</text>\n";
+        << "\" stroke=\"#333\"/><text x=\"" << x + 6 << "\" y=\"" << y + 4 << "\">" << html_escape(r.method) << "</text>\n";
     }
     s << "</svg>\n";
   }

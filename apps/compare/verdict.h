@@ -37,6 +37,14 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
 //! A few lines for the terminal: per edit, the best result and why, then the methods by verdict.
 std::string verdict_summary(const std::vector<MethodResult>& results, const std::vector<Assessment>& assessments);
 
+//! CSS giving each verdict's page cells their background (classes named by to_string).
+constexpr const char* kVerdictCss = ".good{background:#d8f0d0}.fair{background:#eef3c0}.poor{background:#fbe0b8}"
+                                    ".broken{background:#f6c4c0}.failed{background:#e0e0e0}"
+                                    ".not-judged{background:#dfe7f0}";
+
+//! text with <, > and & escaped for HTML.
+std::string html_escape(const std::string& text);
+
 //! Inline SVG (no script) for one edit: horizontal bars per method of rigidity, detail distortion,
 //! self-intersecting pairs and frame time (log axis), and a scatter of rigidity against frame time; bars
 //! coloured by verdict, failed runs marked "failed".

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "msdeform/core/atomic_file.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_io.h"
 #include "msdeform/core/mesh.h"
 
 namespace msd::cli {
@@ -57,6 +59,11 @@ void CameraOptions::apply(const Positions& P, const Region& region, RenderOption
     // the handles and some of what surrounds them; never a zero sphere (one handle vertex)
     o.sphere_radius = std::max(0.75 * (hi - lo).norm(), 0.05 * bounding_box_diagonal(P));
   }
+}
+
+void check_picture_output(const std::string& path, const char* option) {
+  if (file_extension(path) != ".png") throw InvalidInput(std::string(option) + " " + path + ": the picture is a .png");
+  check_writable(path, option);
 }
 
 Positions region_colors(const Region& region) {

@@ -23,6 +23,10 @@ struct CameraOptions {
   void apply(const Positions& P, const Region& region, RenderOptions& o) const;
 };
 
+// Before any work: an output picture path (option, e.g. "-o") is a .png that can be written.
+// \throw InvalidInput naming the option and the path.
+void check_picture_output(const std::string& path, const char* option);
+
 // #V by 3 colours of the region's roles: fixed slate blue, free clay, handles from a palette (red, green,
 // purple, orange, teal, ... repeating).
 Positions region_colors(const Region& region);

@@ -8,7 +8,6 @@
 
 #include "apps/compare/runner.h"
 #include "apps/compare/verdict.h"
-#include "msdeform/analysis/self_intersections.h"
 #include "apps/msdeform/camera_options.h"
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/deformers.h"
@@ -30,11 +29,6 @@ std::vector<std::string> default_scenes() {
   return {"lift", "bend120", "twist135", "bar-lift", "bar-bend120", "bar-twist135", "crease120"};
 }
 
-std::string html_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) out += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
-  return out;
-}
 
 // One sphere around the rest shape and every result of a scene, so all its pictures share one camera.
 void framing_sphere(const Positions& rest, const std::vector<MethodResult>& results, Vec3& center, double& radius) {
@@ -188,8 +182,7 @@ std::string method_page_html(const MethodEntry& entry, const std::vector<MethodR
   h << "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>msdeform: " << html_escape(entry.name)
     << "</title>\n<style>body{font-family:sans-serif;margin:1.5em}table{border-collapse:collapse;font-size:13px}"
        "td,th{border:1px solid #bbb;padding:3px 6px;vertical-align:top}img{width:320px;border:1px solid #ccc}"
-       ".good{background:#d8f0d0}.fair{background:#eef3c0}.poor{background:#fbe0b8}.broken{background:#f6c4c0}"
-       ".failed{background:#e0e0e0}.not-judged{background:#dfe7f0}</style></head><body>\n<p><a href=\"../index.html\">"
+       << kVerdictCss << "</style></head><body>\n<p><a href=\"../index.html\">"
        "all methods</a></p>\n<h1>"
     << html_escape(entry.name) << "</h1>\n<p>Seed section " << html_escape(entry.section) << ": "
     << html_escape(entry.summary) << "</p>\n<h2>On the edits of this comparison</h2>\n<table><tr>";
@@ -256,10 +249,8 @@ std::string index_html(const std::vector<MethodResult>& results, const std::vect
        "td,th{border:1px solid #bbb;padding:3px 6px;text-align:right}th{background:#eee}"
        "td:nth-child(-n+2){text-align:left}img{width:320px;border:1px solid #ccc}"
        ".grid td{text-align:center;vertical-align:top;font-size:12px}.verdicts td{text-align:left;font-size:12px;"
-       "max-width:16em}.verdict{margin:2px 0}.good{background:#d8f0d0}.fair{background:#eef3c0}"
-       ".poor{background:#fbe0b8}.broken{background:#f6c4c0}.failed{background:#e0e0e0}.not-judged{background:#dfe7f0}"
-       "svg{display:block;"
-       "margin:4px 0}</style></head><body>\n"
+       "max-width:16em}.verdict{margin:2px 0}svg{display:block;margin:4px 0}"
+    << kVerdictCss << "</style></head><body>\n"
        "<h1>msdeform: methods and detail encodings compared</h1>\n"
        "<p>Pictures: colour is the change of the detail heights (normal displacements over a faired base, seed 9.3) against "
        "the input (plain where it is not measured: see the notes above the metrics); one camera per scene; a point "
@@ -474,13 +465,7 @@ void add_compare_command(CLI::App& app) {
             save.vertex_scalar = &r.distortion_per_vertex;
             save.scalar_name = "detail_change";
           }
-          std::vector<std::pair<int, int>> pairs;  // drawn in red over the detail colours
-          std::vector<int> crossing;
-          if (r.self_intersections > 0) {
-            count_self_intersections(r.result, F, &pairs);
-            for (const auto& [f, g] : pairs) crossing.push_back(f), crossing.push_back(g);
-            ro.highlighted_faces = &crossing;
-          }
+          ro.highlighted_faces = &r.self_intersecting_faces;  // in red over the detail colours
           Image img = render(r.result, F, ro);
           write_png(img, (out / png).string());
           save_mesh(r.result, F, (out / "meshes" / (c.name + "--" + r.method + ".ply")).string(), save);

@@ -8,7 +8,6 @@
 #include "apps/msdeform/edit_case.h"
 #include "apps/msdeform/progress.h"
 #include "msdeform/analysis/metrics.h"
-#include "msdeform/core/atomic_file.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/deformation/space_deformer.h"
@@ -66,11 +65,7 @@ void add_deform_command(CLI::App& app) {
       edit->check_output(*controls_output, "--controls-output", {method->cage_file});
       if (same_file(*controls_output, *output)) throw InvalidInput("--controls-output and -o name the same file");
     }
-    if (!render_output->empty()) {
-      if (file_extension(*render_output) != ".png")
-        throw InvalidInput("--render " + *render_output + ": the picture is a .png");
-      check_writable(*render_output, "--render");
-    }
+    if (!render_output->empty()) check_picture_output(*render_output, "--render");
     const EditCase c = welding ? weld_case(edit->load(), *weld) : edit->load();
     if (c.weld)
       std::printf("welded %d vertices into others (within %g); %d faces lost a corner and were dropped\n",

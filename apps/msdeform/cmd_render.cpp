@@ -6,7 +6,6 @@
 #include "apps/msdeform/edit_case.h"
 #include "msdeform/analysis/metrics.h"
 #include "msdeform/analysis/self_intersections.h"
-#include "msdeform/core/atomic_file.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/decomposition/low_pass.h"
@@ -39,8 +38,7 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--size", *size, "Width and height in pixels")->expected(2)->check(CLI::Range(16, 8192));
   cmd->add_option("-o,--output", *output, "PNG to write (atomically)")->required();
   cmd->callback([=] {
-    if (file_extension(*output) != ".png") throw InvalidInput("render: -o " + *output + ": the picture is a .png");
-    check_writable(*output, "-o");
+    check_picture_output(*output, "-o");
     const EditCase c = edit->load(/*need_transforms=*/false, /*need_region=*/false);
     RenderOptions o;
     o.width = (*size)[0];

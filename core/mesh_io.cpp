@@ -259,9 +259,10 @@ class PlyReader {
           }
           const double n = value(prop.list_count_type);  // an integer type (parse_header)
           const bool indices = e.name == "face" && (prop.name == "vertex_indices" || prop.name == "vertex_index");
-          if (n < (indices ? 3 : 0) || n > (1 << 20))
-            fail(e.name + " " + std::to_string(i) + " has a list of " + std::to_string(static_cast<long long>(n)) +
-                 " items" + (indices ? " (a face needs 3 to 2^20 corners)" : " (at most 2^20)"));
+          // Written so that NaN fails too; a fractional count is not an integer either.
+          if (!(n >= (indices ? 3 : 0) && n <= (1 << 20)) || n != std::floor(n))
+            fail(e.name + " " + std::to_string(i) + " has a list of " + number(n) +
+                 " items" + (indices ? " (a face needs 3 to 2^20 corners)" : " (a whole number, at most 2^20)"));
           for (int j = 0; j < static_cast<int>(n); ++j) {
             const double idx = value(prop.type);
             if (!indices) continue;

@@ -68,6 +68,8 @@ put("ply_ascii", "quad_with_normals_colors.ply", ply + "4 0 1 2 3\n")
 put("ply_ascii", "no_properties_huge.ply", "ply\nformat ascii 1.0\nelement vertex 4000000000\nend_header\n")
 put("ply_ascii", "junk_element.ply", "ply\nformat ascii 1.0\nelement junk 9000000000000000000\nend_header\n")
 put("ply_ascii", "count_trailing_junk.ply", "ply\nformat ascii 1.0\nelement vertex 3x\nproperty float x\nend_header\n")
+put("ply_ascii", "huge_list_count.ply", ply_header("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\n1.6e35 0 1 2\n")
+put("ply_ascii", "nan_list_count.ply", ply_header("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\nnan 0 1 2\n")
 put("ply_ascii", "obj_info_and_other_element.ply",
     "ply\nformat ascii 1.0\nobj_info made by hand\nelement vertex 3\nproperty float x\nproperty float y\n"
     "property float z\nelement edge 1\nproperty int vertex1\nproperty int vertex2\nelement face 1\n"

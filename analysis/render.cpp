@@ -370,6 +370,18 @@ Vec3 viridis(double t) {
   return c;
 }
 
+Positions region_colors(const Region& region) {
+  static const Vec3 palette[] = {{0.84, 0.19, 0.15}, {0.20, 0.63, 0.17}, {0.55, 0.32, 0.71},
+                                 {0.95, 0.55, 0.10}, {0.10, 0.60, 0.62}, {0.85, 0.40, 0.65}};
+  const Vec3 fixed(0.38, 0.47, 0.62), free = RenderOptions{}.base_color;
+  Positions colors(region.num_vertices(), 3);
+  for (int v = 0; v < region.num_vertices(); ++v) {
+    const int k = region.handle_of(v);
+    colors.row(v) = (k >= 0 ? palette[k % 6] : region.is_fixed(v) ? fixed : free).transpose();
+  }
+  return colors;
+}
+
 std::pair<double, double> robust_scalar_range(const Eigen::VectorXd& values) {
   if (values.size() == 0) throw InvalidInput("robust_scalar_range: no values");
   std::vector<double> v(values.data(), values.data() + values.size());

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "msdeform/core/region.h"
 #include "msdeform/core/types.h"
 
 namespace msd {
@@ -146,6 +147,10 @@ std::pair<double, double> robust_scalar_range(const Eigen::VectorXd& values);
 
 //! Viridis colour map (piecewise-linear approximation through 9 samples); t is clamped to [0, 1].
 Vec3 viridis(double t);
+
+//! #V by 3 sRGB colours of a region's roles, for RenderOptions::vertex_colors: fixed slate blue, free
+//! clay (base_color), handle k from a palette (red, green, purple, orange, teal, pink, repeating).
+Positions region_colors(const Region& region);
 
 //! Draws text with the built-in 5×7 font, each font pixel a scale × scale block, top-left corner at
 //! (x, y); clipped at the image border. Covers ASCII 32..126; anything else draws as a hollow box.

@@ -15,7 +15,7 @@ cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLA
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DMSD_BUILD_PYTHON=OFF -DMSD_BUILD_BENCH=OFF -DMSD_INSTALL=OFF >/dev/null
 targets=(test_core test_decomposition test_detail test_deformation test_reconstruction test_analysis
-         test_conformance test_compare msdeform replay_off replay_obj replay_ply replay_stl replay_sel replay_dmat replay_def)
+         test_conformance test_compare test_view msdeform replay_off replay_obj replay_ply replay_stl replay_sel replay_dmat replay_def)
 start=$SECONDS
 cmake --build "$build" -j "$jobs" --target "${targets[@]}"
 echo "sanitize: build $((SECONDS - start)) s"

@@ -11,6 +11,7 @@ packages=(
   catch2 libcli11-dev libstb-dev
   pybind11-dev python3-dev python3-numpy python3-pytest
   libcgal-demo
+  libglfw3-dev libimgui-dev libgl1-mesa-dri xvfb xauth
   "$@"
 )
 

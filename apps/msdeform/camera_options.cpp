@@ -66,16 +66,4 @@ void check_picture_output(const std::string& path, const char* option) {
   check_writable(path, option);
 }
 
-Positions region_colors(const Region& region) {
-  static const Vec3 palette[] = {{0.84, 0.19, 0.15}, {0.20, 0.63, 0.17}, {0.55, 0.32, 0.71},
-                                 {0.95, 0.55, 0.10}, {0.10, 0.60, 0.62}, {0.85, 0.40, 0.65}};
-  Positions colors(region.num_vertices(), 3);
-  for (int v = 0; v < region.num_vertices(); ++v) {
-    const int k = region.handle_of(v);
-    const Vec3 c = k >= 0 ? palette[k % 6] : region.is_fixed(v) ? Vec3(0.38, 0.47, 0.62) : Vec3(0.80, 0.68, 0.54);
-    colors.row(v) = c.transpose();
-  }
-  return colors;
-}
-
 }  // namespace msd::cli

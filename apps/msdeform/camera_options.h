@@ -27,8 +27,4 @@ struct CameraOptions {
 // \throw InvalidInput naming the option and the path.
 void check_picture_output(const std::string& path, const char* option);
 
-// #V by 3 colours of the region's roles: fixed slate blue, free clay, handles from a palette (red, green,
-// purple, orange, teal, ... repeating).
-Positions region_colors(const Region& region);
-
 }  // namespace msd::cli

@@ -11,5 +11,6 @@ void add_deform_command(CLI::App& app);
 void add_decompose_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
 void add_render_command(CLI::App& app);
+void add_view_command(CLI::App& app);  // needs MSD_HAVE_VIEWER to open a window
 
 }  // namespace msd::cli

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   msd::cli::add_decompose_command(app);
   msd::cli::add_compare_command(app);
   msd::cli::add_render_command(app);
+  msd::cli::add_view_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,1008 @@
+#include "apps/view/viewer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <future>
+#include <map>
+#include <memory>
+#include <mutex>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include "apps/view/interaction.h"
+#include "msdeform/analysis/metrics.h"
+#include "msdeform/analysis/render.h"
+#include "msdeform/core/errors.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/mesh_io.h"
+
+namespace msd::view {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+constexpr int kPanelWidth = 380;
+constexpr double kIdleBudgetMs = 30;  // iterations of a nonlinear method per drawn frame while idle
+
+const char* kVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec3 normal;
+layout(location = 2) in vec3 color;
+uniform mat4 view;
+uniform mat4 projection;
+out vec3 view_position;
+out vec3 view_normal;
+out vec3 vertex_color;
+void main() {
+  vec4 p = view * vec4(position, 1.0);
+  view_position = p.xyz;
+  view_normal = mat3(view) * normal;
+  vertex_color = color;
+  gl_Position = projection * p;
+})";
+
+// A head light with a little specular; flat shading takes the face normal from the screen derivatives.
+const char* kFragmentShader = R"(#version 330 core
+in vec3 view_position;
+in vec3 view_normal;
+in vec3 vertex_color;
+uniform int flat_shading;
+out vec4 fragment;
+void main() {
+  vec3 n = flat_shading != 0 ? normalize(cross(dFdx(view_position), dFdy(view_position))) : normalize(view_normal);
+  vec3 to_eye = normalize(-view_position);
+  if (dot(n, to_eye) < 0.0) n = -n;  // both sides lit
+  vec3 light = normalize(vec3(0.3, 0.5, 1.0));
+  float diffuse = max(dot(n, light), 0.0);
+  float specular = pow(max(dot(reflect(-light, n), to_eye), 0.0), 40.0);
+  fragment = vec4(vertex_color * (0.28 + 0.72 * diffuse) + vec3(0.12 * specular), 1.0);
+})";
+
+GLuint compile(GLenum kind, const char* source) {
+  const GLuint shader = glCreateShader(kind);
+  glShaderSource(shader, 1, &source, nullptr);
+  glCompileShader(shader);
+  GLint ok = 0;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[2048];
+    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
+    throw UsageError(std::string("view: the OpenGL driver did not compile a shader: ") + log);
+  }
+  return shader;
+}
+
+enum class Tool { Orbit, Translate, Rotate, Brush, Lasso };
+enum class Coloring { Region, Rigidity, Detail, None };
+
+class Viewer {
+ public:
+  explicit Viewer(const ViewerOptions& options);
+  ~Viewer();
+  int run();
+
+ private:
+  // --- editing state ---
+  void set_mesh(EditCase edit);
+  void region_changed();  // renumbers handles, resizes transforms, re-prepares
+  void prepare(bool wait);         // starts preparing on a worker thread (wait: until it is done)
+  void finish_prepare(bool wait);  // installs the prepared method once the worker is done
+  void frame();
+  void recolor();
+  Vec3 handle_center(int k) const;
+  Gizmo gizmo() const;
+  void paint_role(const std::vector<int>& vertices);
+
+  // --- input, in pixels of the 3D view ---
+  void pointer_down(int button, const Vec2& p, bool shift);
+  void pointer_move(const Vec2& p);
+  void pointer_up();
+  void poll_mouse();
+
+  // --- drawing ---
+  void draw_scene();
+  void draw_overlay();
+  void draw_panel();
+  void upload_positions();
+  void upload_colors();
+  DepthImage read_depth();
+  void write_screenshot(const std::string& path);
+  void write_window_screenshot(const std::string& path);
+
+  // --- scripted mode ---
+  bool step_script();  // one step of the current command; false when the script is done
+  void run_command_step(const ScriptCommand& c, int step, bool& done);
+
+  void status(const std::string& text) {
+    status_ = text;
+    if (!options_.script.empty() && !options_.quiet) std::printf("view: %s\n", text.c_str());
+  }
+
+  ViewerOptions options_;
+  EditCase edit_;
+  Positions X_;  // the shown positions (#V×3)
+  std::vector<Mat4> transforms_;
+  int active_handle_ = 0;
+  std::string method_;
+  std::unique_ptr<Deformer> deformer_;
+  struct Preparation {
+    std::unique_ptr<Deformer> deformer;
+    std::string error;
+    double ms = 0;
+  };
+  struct Phase {  // the phase a preparing method last reported (set on the worker thread)
+    std::mutex mutex;
+    std::string text;
+  };
+  std::future<Preparation> preparing_;
+  std::shared_ptr<Phase> phase_ = std::make_shared<Phase>();
+  Clock::time_point preparing_since_;
+  bool needs_prepare_ = true, needs_frame_ = true, iterating_ = false;
+  double prepare_ms_ = 0, frame_ms_ = 0, draw_ms_ = 0;
+  std::string status_, error_;
+  std::unique_ptr<RigidityMetric> rigidity_;
+  std::unique_ptr<DetailDistortionMetric> detail_;
+  Eigen::VectorXd metric_;
+  std::string metric_text_;
+
+  Tool tool_ = Tool::Translate;
+  int paint_code_ = Region::kFirstHandle;  // the role painted: 0 fixed, 1 free, 2 + k handle k
+  float brush_radius_ = 25;
+  Coloring coloring_ = Coloring::Region;
+  bool flat_shading_ = false;
+
+  OrbitCamera camera_;
+  // a drag in progress
+  int drag_button_ = -1;
+  Vec2 drag_from_, drag_last_;
+  GizmoPart drag_part_ = GizmoPart::None;
+  Gizmo drag_gizmo_;
+  Mat4 drag_start_transform_ = Mat4::Identity();
+  bool drag_pan_ = false;
+  Positions stroke_screen_;
+  DepthImage stroke_depth_;
+  std::vector<Vec2> lasso_;
+  Vec2 cursor_ = Vec2(-1, -1);
+
+  // file fields of the panel
+  std::string mesh_path_, sel_path_ = "region.sel", def_path_ = "handles.def", out_path_ = "deformed.off",
+                          shot_path_ = "view.png";
+
+  // scripted mode
+  std::vector<ScriptCommand> script_;
+  size_t script_index_ = 0;
+  int script_step_ = 0;
+  bool script_failed_ = false;
+  std::vector<double> command_frame_ms_;
+  std::string window_shot_;  // written after the next drawn frame
+
+  // window and OpenGL objects
+  GLFWwindow* window_ = nullptr;
+  GLuint program_ = 0, vao_ = 0, buffers_[4] = {0, 0, 0, 0};
+  std::vector<float> upload_;
+  VertexNormals normals_;
+  Positions N_;
+};
+
+Viewer::Viewer(const ViewerOptions& options) : options_(options), method_(options.method) {
+  if (!options_.script.empty()) script_ = read_script(options_.script);  // before a window opens
+  if (!glfwInit()) throw UsageError("view: GLFW could not start (is there a display? run under xvfb-run without one)");
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_SAMPLES, 4);
+  window_ = glfwCreateWindow(options_.width, options_.height, "msdeform view", nullptr, nullptr);
+  if (!window_) {
+    glfwTerminate();
+    throw UsageError("view: no window with an OpenGL 3.3 core context could be opened (no display, or a driver "
+                     "without OpenGL 3.3; Mesa's software renderer has it: LIBGL_ALWAYS_SOFTWARE=1)");
+  }
+  glfwMakeContextCurrent(window_);
+  glfwSwapInterval(1);
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini written next to the user's files
+  ImGui::StyleColorsLight();
+  ImGui_ImplGlfw_InitForOpenGL(window_, true);
+  ImGui_ImplOpenGL3_Init("#version 330");
+
+  program_ = glCreateProgram();
+  const GLuint vs = compile(GL_VERTEX_SHADER, kVertexShader), fs = compile(GL_FRAGMENT_SHADER, kFragmentShader);
+  glAttachShader(program_, vs);
+  glAttachShader(program_, fs);
+  glLinkProgram(program_);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  glGenVertexArrays(1, &vao_);
+  glGenBuffers(4, buffers_);
+  glBindVertexArray(vao_);
+  for (GLuint a = 0; a < 3; ++a) {
+    glBindBuffer(GL_ARRAY_BUFFER, buffers_[a]);
+    glEnableVertexAttribArray(a);
+    glVertexAttribPointer(a, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  }
+  glBindVertexArray(0);
+  set_mesh(options_.edit);
+}
+
+Viewer::~Viewer() {
+  glDeleteBuffers(4, buffers_);
+  glDeleteVertexArrays(1, &vao_);
+  glDeleteProgram(program_);
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+  glfwDestroyWindow(window_);
+  glfwTerminate();
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Editing
+
+void Viewer::set_mesh(EditCase edit) {
+  if (edit.F.rows() == 0) throw InvalidInput("view: " + edit.name + " has no faces (the viewer draws triangle meshes)");
+  edit_ = std::move(edit);
+  mesh_path_ = edit_.path;
+  X_ = edit_.P;
+  if (edit_.region.num_vertices() != edit_.P.rows()) edit_.region = Region(static_cast<int>(edit_.P.rows()));
+  transforms_ = edit_.transforms;
+  normals_ = VertexNormals(edit_.F, static_cast<int>(edit_.P.rows()));
+  rigidity_ = std::make_unique<RigidityMetric>(edit_.P, edit_.F);
+  int w = 0, h = 0;
+  glfwGetFramebufferSize(window_, &w, &h);
+  camera_.frame(edit_.P, options_.up, options_.view_direction, std::max(w - kPanelWidth, 1), std::max(h, 1));
+  // Topology and index buffer once per mesh.
+  std::vector<unsigned> indices(edit_.F.size());
+  for (Eigen::Index f = 0; f < edit_.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) indices[3 * f + k] = static_cast<unsigned>(edit_.F(f, k));
+  glBindVertexArray(vao_);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, buffers_[3]);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, indices.size() * sizeof(unsigned), indices.data(), GL_STATIC_DRAW);
+  glBindVertexArray(0);
+  for (GLuint a = 0; a < 3; ++a) {
+    glBindBuffer(GL_ARRAY_BUFFER, buffers_[a]);
+    glBufferData(GL_ARRAY_BUFFER, edit_.P.size() * sizeof(float), nullptr, GL_DYNAMIC_DRAW);
+  }
+  region_changed();
+  upload_positions();
+}
+
+void Viewer::region_changed() {
+  // Handles numbered 0..n-1 in order of their old numbers, so a handle painted over entirely disappears.
+  std::vector<int> codes = edit_.region.codes();
+  std::map<int, int> renumber;
+  for (int c : codes)
+    if (c >= Region::kFirstHandle) renumber.emplace(c, 0);
+  std::vector<Mat4> transforms;
+  for (auto& [old_code, new_code] : renumber) {
+    const int old_handle = old_code - Region::kFirstHandle;
+    new_code = Region::kFirstHandle + static_cast<int>(transforms.size());
+    transforms.push_back(old_handle < static_cast<int>(transforms_.size()) ? transforms_[old_handle]
+                                                                           : Mat4::Identity());
+  }
+  for (int& c : codes)
+    if (c >= Region::kFirstHandle) c = renumber[c];
+  edit_.region = Region::from_codes(codes);
+  transforms_ = transforms;
+  active_handle_ = std::clamp(active_handle_, 0, std::max(edit_.region.num_handles() - 1, 0));
+  try {
+    detail_ = std::make_unique<DetailDistortionMetric>(edit_.P, edit_.F, edit_.region);
+  } catch (const Error&) {
+    detail_.reset();  // no free vertices: nothing to measure
+  }
+  needs_prepare_ = true;
+  recolor();
+}
+
+void Viewer::prepare(bool wait) {
+  needs_prepare_ = false;
+  deformer_.reset();
+  error_.clear();
+  if (edit_.region.num_handles() == 0) {
+    error_ = "no handle yet: choose the Brush or Lasso tool, paint 'handle', then drag it";
+    X_ = edit_.P;
+    upload_positions();
+    return;
+  }
+  try {
+    MethodSettings s = options_.settings;
+    s.arap.max_iterations = options_.iterations_per_frame;
+    s.primo.max_iterations = options_.iterations_per_frame;
+    auto d = builtin_methods().make(method_, s);
+    if (d->traits().domain == DeformerDomain::Surface) require_surface(edit_, method_);
+    d->set_progress([phase = phase_](const std::string& line) {
+      const std::lock_guard<std::mutex> lock(phase->mutex);
+      phase->text = line;
+    });
+    // On a worker thread, so the window stays alive while a large mesh is factored.
+    preparing_since_ = Clock::now();
+    preparing_ = std::async(std::launch::async, [d = std::move(d), P = edit_.P, F = edit_.F,
+                                                 region = edit_.region]() mutable {
+      Preparation r;
+      const auto start = Clock::now();
+      try {
+        d->prepare(P, F, region);
+        r.deformer = std::move(d);
+      } catch (const Error& e) {
+        r.error = e.what();
+      } catch (const std::bad_alloc&) {
+        r.error = "out of memory while preparing";
+      }
+      r.ms = ms_since(start);
+      return r;
+    });
+  } catch (const Error& e) {
+    error_ = e.what();
+    X_ = edit_.P;
+    upload_positions();
+    return;
+  }
+  if (wait) finish_prepare(true);
+}
+
+void Viewer::finish_prepare(bool wait) {
+  if (!preparing_.valid()) return;
+  if (!wait && preparing_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+  Preparation r = preparing_.get();
+  if (needs_prepare_) return;  // the region or method changed meanwhile: a newer preparation follows
+  if (!r.deformer) {
+    error_ = r.error;
+    X_ = edit_.P;
+    upload_positions();
+    return;
+  }
+  deformer_ = std::move(r.deformer);
+  deformer_->set_progress({});  // frames stay allocation-free
+  prepare_ms_ = r.ms;
+  status("prepared " + method_ + " in " + std::to_string(static_cast<int>(prepare_ms_)) + " ms");
+  for (const std::string& w : deformer_->prepare_warnings()) status("warning: " + w);
+  needs_frame_ = true;
+}
+
+void Viewer::frame() {
+  needs_frame_ = false;
+  if (!deformer_) return;
+  try {
+    const auto start = Clock::now();
+    deformer_->deform(transforms_, X_);
+    frame_ms_ = ms_since(start);
+    command_frame_ms_.push_back(frame_ms_);
+    const FrameReport& r = deformer_->frame_report();
+    iterating_ = deformer_->traits().solve == DeformerSolve::Iterative && !r.converged;
+    upload_positions();
+    if (coloring_ == Coloring::Rigidity || coloring_ == Coloring::Detail) recolor();
+  } catch (const Error& e) {
+    error_ = e.what();
+    iterating_ = false;
+  }
+}
+
+void Viewer::recolor() {
+  Positions colors;
+  metric_text_.clear();
+  if (coloring_ == Coloring::Region) {
+    colors = region_colors(edit_.region);
+  } else if (coloring_ == Coloring::None) {
+    colors = RenderOptions{}.base_color.transpose().replicate(edit_.P.rows(), 1);
+  } else {
+    try {
+      if (coloring_ == Coloring::Rigidity) {
+        metric_ = rigidity_->measure(X_).per_vertex;
+      } else {
+        if (!detail_) throw InvalidInput("detail change needs free vertices");
+        metric_ = detail_->measure(X_).per_vertex;
+      }
+      const auto [lo, hi] = robust_scalar_range(metric_);
+      colors.resize(metric_.size(), 3);
+      for (Eigen::Index v = 0; v < metric_.size(); ++v)
+        colors.row(v) = viridis((metric_[v] - lo) / std::max(hi - lo, 1e-300)).transpose();
+      char text[160];
+      std::snprintf(text, sizeof text, "%s: mean %.3g, max %.3g (colours %.3g .. %.3g)",
+                    coloring_ == Coloring::Rigidity ? "rigidity" : "detail change", metric_.mean(),
+                    metric_.maxCoeff(), lo, hi);
+      metric_text_ = text;
+    } catch (const Error& e) {
+      metric_text_ = e.what();
+      colors = RenderOptions{}.base_color.transpose().replicate(edit_.P.rows(), 1);
+    }
+  }
+  upload_.resize(colors.size());
+  for (Eigen::Index v = 0; v < colors.rows(); ++v)
+    for (int k = 0; k < 3; ++k) upload_[3 * v + k] = static_cast<float>(colors(v, k));
+  glBindBuffer(GL_ARRAY_BUFFER, buffers_[2]);
+  glBufferSubData(GL_ARRAY_BUFFER, 0, upload_.size() * sizeof(float), upload_.data());
+}
+
+void Viewer::upload_positions() {
+  normals_.compute(X_, N_);
+  upload_.resize(X_.size());
+  for (int b = 0; b < 2; ++b) {
+    const Positions& A = b == 0 ? X_ : N_;
+    for (Eigen::Index v = 0; v < A.rows(); ++v)
+      for (int k = 0; k < 3; ++k) upload_[3 * v + k] = static_cast<float>(A(v, k));
+    glBindBuffer(GL_ARRAY_BUFFER, buffers_[b]);
+    glBufferSubData(GL_ARRAY_BUFFER, 0, upload_.size() * sizeof(float), upload_.data());
+  }
+}
+
+Vec3 Viewer::handle_center(int k) const {
+  const std::vector<int> vs = edit_.region.handle_vertices(k);
+  Vec3 c = Vec3::Zero();
+  for (int v : vs) c += edit_.P.row(v).transpose();
+  c /= std::max<double>(vs.size(), 1);
+  return transform_point(transforms_.at(k), c);
+}
+
+Gizmo Viewer::gizmo() const {
+  Gizmo g;
+  g.center = handle_center(active_handle_);
+  return g;
+}
+
+void Viewer::paint_role(const std::vector<int>& vertices) {
+  if (vertices.empty()) return;
+  Region r = edit_.region;
+  if (paint_code_ >= Region::kFirstHandle) {
+    r.set_handle(vertices, paint_code_ - Region::kFirstHandle);
+  } else if (paint_code_ == Region::kFixed) {
+    r.set_fixed(vertices);
+  } else {
+    r.set_free(vertices);
+  }
+  edit_.region = r;
+  recolor();  // the region is committed when the stroke ends (region_changed)
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Input
+
+void Viewer::pointer_down(int button, const Vec2& p, bool shift) {
+  drag_button_ = button;
+  drag_from_ = drag_last_ = p;
+  drag_part_ = GizmoPart::None;
+  drag_pan_ = button == 2 || (button == 1 && shift);
+  if (button != 0) return;
+  const bool gizmo_tool = tool_ == Tool::Translate || tool_ == Tool::Rotate;
+  if (gizmo_tool && deformer_ && edit_.region.num_handles() > 0) {
+    drag_gizmo_ = gizmo();
+    drag_part_ = drag_gizmo_.pick(camera_, tool_ == Tool::Rotate ? GizmoMode::Rotate : GizmoMode::Translate, p);
+    drag_start_transform_ = transforms_[active_handle_];
+  } else if (tool_ == Tool::Brush || tool_ == Tool::Lasso) {
+    stroke_depth_ = read_depth();
+    stroke_screen_ = project_vertices(camera_, X_);
+    lasso_.assign(1, p);
+    if (tool_ == Tool::Brush) paint_role(brush_select(stroke_screen_, p, brush_radius_, stroke_depth_));
+  }
+}
+
+void Viewer::pointer_move(const Vec2& p) {
+  cursor_ = p;
+  if (drag_button_ < 0) return;
+  const Vec2 d = p - drag_last_;
+  drag_last_ = p;
+  if (drag_pan_) {
+    camera_.pan(d.x(), d.y());
+  } else if (drag_button_ == 1 || (drag_button_ == 0 && tool_ == Tool::Orbit) ||
+             (drag_button_ == 0 && drag_part_ == GizmoPart::None && (tool_ == Tool::Translate || tool_ == Tool::Rotate))) {
+    camera_.orbit(d.x(), d.y());
+  } else if (drag_part_ != GizmoPart::None) {
+    const GizmoMode mode = tool_ == Tool::Rotate ? GizmoMode::Rotate : GizmoMode::Translate;
+    transforms_[active_handle_] = drag_gizmo_.drag(camera_, mode, drag_part_, drag_from_, p) * drag_start_transform_;
+    needs_frame_ = true;
+  } else if (tool_ == Tool::Brush) {
+    paint_role(brush_select(stroke_screen_, p, brush_radius_, stroke_depth_));
+  } else if (tool_ == Tool::Lasso && (p - lasso_.back()).norm() >= 3) {
+    lasso_.push_back(p);
+  }
+}
+
+void Viewer::pointer_up() {
+  if (drag_button_ == 0 && tool_ == Tool::Lasso) paint_role(lasso_select(stroke_screen_, lasso_, stroke_depth_));
+  if (drag_button_ == 0 && (tool_ == Tool::Brush || tool_ == Tool::Lasso)) region_changed();
+  lasso_.clear();
+  drag_button_ = -1;
+  drag_part_ = GizmoPart::None;
+}
+
+void Viewer::poll_mouse() {
+  const ImGuiIO& io = ImGui::GetIO();
+  const Vec2 p(io.MousePos.x - kPanelWidth, io.MousePos.y);
+  if (io.WantCaptureMouse && drag_button_ < 0) {
+    cursor_ = Vec2(-1, -1);
+    return;
+  }
+  for (int b = 0; b < 3; ++b)
+    if (ImGui::IsMouseClicked(b) && drag_button_ < 0 && p.x() >= 0) pointer_down(b, p, io.KeyShift);
+  pointer_move(p);
+  if (drag_button_ >= 0 && ImGui::IsMouseReleased(drag_button_)) pointer_up();
+  if (io.MouseWheel != 0 && p.x() >= 0) camera_.zoom(io.MouseWheel);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Drawing
+
+void Viewer::draw_scene() {
+  int w = 0, h = 0;
+  glfwGetFramebufferSize(window_, &w, &h);
+  camera_.resize(std::max(w - kPanelWidth, 1), std::max(h, 1));
+  glViewport(0, 0, w, h);
+  glClearColor(0.80f, 0.85f, 0.90f, 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glViewport(kPanelWidth, 0, camera_.width(), camera_.height());
+  glEnable(GL_DEPTH_TEST);
+  glUseProgram(program_);
+  const Eigen::Matrix4f V = camera_.view_matrix().cast<float>(), Pm = camera_.projection_matrix().cast<float>();
+  glUniformMatrix4fv(glGetUniformLocation(program_, "view"), 1, GL_FALSE, V.data());
+  glUniformMatrix4fv(glGetUniformLocation(program_, "projection"), 1, GL_FALSE, Pm.data());
+  glUniform1i(glGetUniformLocation(program_, "flat_shading"), flat_shading_ ? 1 : 0);
+  glBindVertexArray(vao_);
+  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(edit_.F.size()), GL_UNSIGNED_INT, nullptr);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  glDisable(GL_DEPTH_TEST);
+  glViewport(0, 0, w, h);
+}
+
+DepthImage Viewer::read_depth() {
+  draw_scene();  // the depth of what is shown now
+  DepthImage d;
+  d.width = camera_.width();
+  d.height = camera_.height();
+  std::vector<float> rows(static_cast<size_t>(d.width) * d.height);
+  glReadPixels(kPanelWidth, 0, d.width, d.height, GL_DEPTH_COMPONENT, GL_FLOAT, rows.data());
+  d.depth.resize(rows.size());
+  for (int y = 0; y < d.height; ++y)  // OpenGL's rows start at the bottom
+    std::copy_n(rows.begin() + static_cast<long>(d.height - 1 - y) * d.width, d.width,
+                d.depth.begin() + static_cast<long>(y) * d.width);
+  return d;
+}
+
+void Viewer::write_screenshot(const std::string& path) {
+  draw_scene();
+  glFinish();
+  Image image(camera_.width(), camera_.height());
+  std::vector<std::uint8_t> rows(image.rgb.size());
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(kPanelWidth, 0, image.width, image.height, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
+  for (int y = 0; y < image.height; ++y)
+    std::copy_n(rows.begin() + 3L * (image.height - 1 - y) * image.width, 3L * image.width, image.pixel(0, y));
+  write_png(image, path);
+}
+
+void Viewer::write_window_screenshot(const std::string& path) {
+  int w = 0, h = 0;
+  glfwGetFramebufferSize(window_, &w, &h);
+  Image image(w, h);
+  std::vector<std::uint8_t> rows(image.rgb.size());
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
+  for (int y = 0; y < h; ++y) std::copy_n(rows.begin() + 3L * (h - 1 - y) * w, 3L * w, image.pixel(0, y));
+  write_png(image, path);
+}
+
+void Viewer::draw_overlay() {
+  ImDrawList* draw = ImGui::GetForegroundDrawList();
+  const ImVec2 offset(kPanelWidth, 0);
+  auto at = [&](const Vec3& screen) { return ImVec2(offset.x + screen.x(), offset.y + screen.y()); };
+  if ((tool_ == Tool::Translate || tool_ == Tool::Rotate) && deformer_ && edit_.region.num_handles() > 0) {
+    const Gizmo g = drag_part_ != GizmoPart::None ? drag_gizmo_ : gizmo();
+    const ImVec2 c = at(camera_.project(g.center));
+    const ImU32 colors[3] = {IM_COL32(220, 40, 40, 255), IM_COL32(40, 170, 40, 255), IM_COL32(40, 80, 230, 255)};
+    const GizmoMode mode = tool_ == Tool::Rotate ? GizmoMode::Rotate : GizmoMode::Translate;
+    const GizmoPart hover = drag_part_ != GizmoPart::None ? drag_part_ : g.pick(camera_, mode, cursor_);
+    for (int a = 0; a < 3; ++a) {
+      const ImVec2 tip = at(camera_.project(g.arrow_tip(camera_, a)));
+      const bool hot = hover == static_cast<GizmoPart>(static_cast<int>(GizmoPart::X) + a);
+      draw->AddLine(c, tip, colors[a], hot ? 5.f : 3.f);
+      if (tool_ == Tool::Translate)
+        draw->AddCircleFilled(tip, hot ? 7.f : 5.f, colors[a]);
+      else
+        draw->AddCircle(tip, hot ? 9.f : 7.f, colors[a], 16, 2.5f);
+    }
+    const float radius = mode == GizmoMode::Translate ? 10.f : static_cast<float>(g.ring_pixels());
+    draw->AddCircle(c, radius, IM_COL32(30, 30, 30, 255), 48, hover == GizmoPart::Center ? 4.f : 2.f);
+  }
+  if (tool_ == Tool::Brush && cursor_.x() >= 0)
+    draw->AddCircle(ImVec2(offset.x + cursor_.x(), cursor_.y()), brush_radius_, IM_COL32(20, 20, 20, 200), 48, 1.5f);
+  if (tool_ == Tool::Lasso && lasso_.size() > 1) {
+    std::vector<ImVec2> points;
+    for (const Vec2& p : lasso_) points.emplace_back(offset.x + p.x(), p.y());
+    draw->AddPolyline(points.data(), static_cast<int>(points.size()), IM_COL32(20, 20, 20, 230), ImDrawFlags_Closed, 1.5f);
+  }
+}
+
+void Viewer::draw_panel() {
+  int w = 0, h = 0;
+  glfwGetWindowSize(window_, &w, &h);
+  ImGui::SetNextWindowPos(ImVec2(0, 0));
+  ImGui::SetNextWindowSize(ImVec2(kPanelWidth, static_cast<float>(h)));
+  ImGui::Begin("msdeform", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::PushItemWidth(-120);
+  ImGui::Text("%s: %ld vertices, %ld faces", edit_.name.c_str(), static_cast<long>(edit_.P.rows()),
+              static_cast<long>(edit_.F.rows()));
+  if (!edit_.surface_problem.empty()) ImGui::TextWrapped("not a manifold mesh: %s", edit_.surface_problem.c_str());
+
+  if (ImGui::CollapsingHeader("Method", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (ImGui::BeginCombo("method", method_.c_str())) {
+      for (const MethodEntry& e : builtin_methods().entries())
+        if (ImGui::Selectable(e.name.c_str(), e.name == method_)) {
+          method_ = e.name;
+          needs_prepare_ = true;
+        }
+      ImGui::EndCombo();
+    }
+    const MethodEntry& entry = builtin_methods().find(method_);
+    ImGui::TextWrapped("%s (seed %s)", entry.summary.c_str(), entry.section.c_str());
+    if (method_ == "arap" || method_ == "primo") {
+      if (ImGui::SliderInt("iterations/frame", &options_.iterations_per_frame, 1, 50)) needs_prepare_ = true;
+    }
+    if (method_ == "shell" || method_.rfind("multiscale", 0) == 0) {
+      float k = static_cast<float>(options_.settings.shell.ks);
+      if (ImGui::SliderFloat("stretching k_s", &k, 0, 10)) {
+        options_.settings.shell.ks = k;
+        needs_prepare_ = true;
+      }
+    }
+    if (preparing_.valid()) {
+      const std::lock_guard<std::mutex> lock(phase_->mutex);
+      ImGui::TextWrapped("preparing %s (%.1f s) %s", method_.c_str(), ms_since(preparing_since_) / 1000,
+                         phase_->text.c_str());
+    }
+    ImGui::Text("prepare %.1f ms, frame %.2f ms, draw %.1f ms", prepare_ms_, frame_ms_, draw_ms_);
+    if (deformer_) {
+      const FrameReport& r = deformer_->frame_report();
+      if (deformer_->traits().solve == DeformerSolve::Iterative)
+        ImGui::Text("%s: %d iterations, residual %.2g", iterating_ ? "iterating" : "converged", r.iterations, r.residual);
+      if (r.folded_faces >= 0) ImGui::Text("folded faces: %d", r.folded_faces);
+      for (const std::string& warning : r.warnings)
+        if (!iterating_) ImGui::TextWrapped("warning: %s", warning.c_str());
+    }
+    if (!error_.empty()) ImGui::TextColored(ImVec4(0.75f, 0.05f, 0.05f, 1), "%s", error_.c_str());
+  }
+
+  if (ImGui::CollapsingHeader("Tool", ImGuiTreeNodeFlags_DefaultOpen)) {
+    int t = static_cast<int>(tool_);
+    const char* tools[] = {"orbit", "move", "rotate", "brush", "lasso"};
+    for (int i = 0; i < 5; ++i) {
+      if (i % 3) ImGui::SameLine();
+      ImGui::RadioButton(tools[i], &t, i);
+    }
+    tool_ = static_cast<Tool>(t);
+    ImGui::TextWrapped("left drag: the tool (move/rotate: the gizmo's arrows or centre); right drag: orbit; middle "
+                       "or shift+right: pan; wheel: zoom");
+    const int handles = edit_.region.num_handles();
+    if (handles > 0) ImGui::SliderInt("active handle", &active_handle_, 0, handles - 1);
+    std::vector<std::string> roles = {"fixed", "free"};
+    for (int k = 0; k <= handles; ++k) roles.push_back(k < handles ? "handle " + std::to_string(k) : "new handle");
+    const int role = std::min(paint_code_, static_cast<int>(roles.size()) - 1);
+    if (ImGui::BeginCombo("paints", roles[role].c_str())) {
+      for (int i = 0; i < static_cast<int>(roles.size()); ++i)
+        if (ImGui::Selectable(roles[i].c_str(), i == role)) paint_code_ = i;
+      ImGui::EndCombo();
+    }
+    ImGui::SliderFloat("brush radius", &brush_radius_, 2, 200, "%.0f px");
+    if (ImGui::Button("reset handles")) {
+      std::fill(transforms_.begin(), transforms_.end(), Mat4::Identity());
+      needs_frame_ = true;
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("clear region")) {
+      edit_.region = Region(static_cast<int>(edit_.P.rows()));
+      region_changed();
+    }
+  }
+
+  if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
+    int c = static_cast<int>(coloring_);
+    const char* colorings[] = {"region", "rigidity", "detail change", "none"};
+    if (ImGui::Combo("colour", &c, colorings, 4)) {
+      coloring_ = static_cast<Coloring>(c);
+      recolor();
+    }
+    if (!metric_text_.empty()) ImGui::TextWrapped("%s", metric_text_.c_str());
+    ImGui::Checkbox("flat shading", &flat_shading_);
+  }
+
+  if (ImGui::CollapsingHeader("Files")) {
+    auto row = [&](const char* label, std::string& path, const char* button) {
+      ImGui::PushID(label);
+      ImGui::InputText(label, &path);
+      ImGui::SameLine();
+      const bool pressed = ImGui::Button(button);
+      ImGui::PopID();
+      return pressed;
+    };
+    try {
+      if (row("mesh", mesh_path_, "load")) {
+        EditCase c = load_edit_case(mesh_path_);
+        set_mesh(std::move(c));
+        status("loaded " + mesh_path_);
+      }
+      if (row("result", out_path_, "save")) {
+        std::error_code ec;
+        if (!edit_.path.empty() && std::filesystem::equivalent(out_path_, edit_.path, ec))
+          throw InvalidInput(out_path_ + " is the input mesh: save the result under another name");
+        save_mesh(X_, edit_.F, out_path_);
+        status("saved " + out_path_);
+      }
+      if (row(".sel", sel_path_, "save")) {
+        write_sel(edit_.region, sel_path_);
+        status("saved " + sel_path_);
+      }
+      if (ImGui::Button("load .sel")) {
+        edit_.region = read_sel(sel_path_, static_cast<int>(edit_.P.rows()));
+        region_changed();
+        status("loaded " + sel_path_);
+      }
+      if (row(".def", def_path_, "save")) {
+        write_def(transforms_, def_path_);
+        status("saved " + def_path_);
+      }
+      if (ImGui::Button("load .def")) {
+        std::vector<Mat4> t = read_def(def_path_);
+        if (static_cast<int>(t.size()) != edit_.region.num_handles())
+          throw InvalidInput(def_path_ + " has " + std::to_string(t.size()) + " transforms for " +
+                             std::to_string(edit_.region.num_handles()) + " handles");
+        transforms_ = t;
+        needs_frame_ = true;
+        status("loaded " + def_path_);
+      }
+      if (row("screenshot", shot_path_, "save")) {
+        write_screenshot(shot_path_);
+        status("saved " + shot_path_);
+      }
+    } catch (const Error& e) {
+      error_ = e.what();
+    }
+  }
+  if (!status_.empty()) ImGui::TextWrapped("%s", status_.c_str());
+  ImGui::PopItemWidth();
+  ImGui::End();
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Scripted mode
+
+void Viewer::run_command_step(const ScriptCommand& c, int step, bool& done) {
+  const std::string& path = options_.script;
+  auto number = [&](size_t i) { return script_number(c, i, path); };
+  auto steps_arg = [&](size_t i) {
+    if (c.args.size() <= i) return 10;
+    const double s = number(i);
+    if (s < 1 || s > 10000 || s != std::floor(s)) throw InvalidInput("STEPS is a whole number from 1 to 10000");
+    return static_cast<int>(s);
+  };
+  auto need_handle = [&] {
+    if (edit_.region.num_handles() == 0) throw InvalidInput("there is no handle to move");
+    if (!deformer_) throw InvalidInput("the method is not prepared: " + error_);
+  };
+  done = true;
+  const std::string& v = c.verb;
+  if (v == "method") {
+    builtin_methods().find(c.args[0]);  // throws, listing the known names
+    method_ = c.args[0];
+    prepare(/*wait=*/true);
+    if (!deformer_) throw InvalidInput(error_);
+  } else if (v == "handle") {
+    const int k = static_cast<int>(number(0));
+    if (k < 0 || k >= edit_.region.num_handles())
+      throw InvalidInput("handle " + std::to_string(k) + " does not exist (" +
+                         std::to_string(edit_.region.num_handles()) + " handles)");
+    active_handle_ = k;
+  } else if (v == "translate" || v == "rotate") {
+    need_handle();
+    const int steps = steps_arg(v == "translate" ? 3 : 4);
+    Mat4 T = Mat4::Identity();
+    if (v == "translate") {
+      T.topRightCorner<3, 1>() = Vec3(number(0), number(1), number(2)) / steps;
+    } else {
+      const Vec3 axis(number(0), number(1), number(2));
+      if (axis.norm() == 0) throw InvalidInput("the rotation axis is zero");
+      const Vec3 c0 = handle_center(active_handle_);
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(number(3) * 3.14159265358979323846 / 180 / steps, axis.normalized()).toRotationMatrix();
+      T.topLeftCorner<3, 3>() = R;
+      T.topRightCorner<3, 1>() = c0 - R * c0;
+    }
+    transforms_[active_handle_] = T * transforms_[active_handle_];
+    needs_frame_ = true;
+    done = step + 1 >= steps;
+  } else if (v == "gizmo") {
+    need_handle();
+    const int steps = steps_arg(4);
+    tool_ = c.args[0] == "rotate" ? Tool::Rotate : Tool::Translate;
+    const Gizmo g = step == 0 ? gizmo() : drag_gizmo_;
+    const Vec2 center = camera_.project(g.center).head<2>();
+    Vec2 start = center;
+    if (c.args[1] != "center") {
+      const int axis = c.args[1] == "x" ? 0 : c.args[1] == "y" ? 1 : 2;
+      start = center + 0.7 * (camera_.project(g.arrow_tip(camera_, axis)).head<2>() - center);
+    }
+    if (c.args[1] == "center" && tool_ == Tool::Rotate) start = center + Vec2(g.ring_pixels(), 0);  // on the ring
+    if (step == 0) {
+      pointer_down(0, start, false);
+      if (drag_part_ == GizmoPart::None) throw InvalidInput("the gizmo part is not under the cursor");
+      done = false;
+      return;
+    }
+    pointer_move(start + (static_cast<double>(step) / steps) * Vec2(number(2), number(3)));
+    if (step >= steps) {
+      pointer_up();
+      return;
+    }
+    done = false;
+  } else if (v == "orbit") {
+    camera_.orbit(number(0), number(1));
+  } else if (v == "zoom") {
+    camera_.zoom(number(0));
+  } else if (v == "paint" || v == "lasso") {
+    const bool handle = c.args[0] == "handle";
+    const size_t first = handle ? 2 : 1;
+    if (handle) {
+      const int k = static_cast<int>(number(1));
+      if (k < 0 || k > edit_.region.num_handles())
+        throw InvalidInput("handle " + std::to_string(k) + ": the next new handle is " +
+                           std::to_string(edit_.region.num_handles()));
+      paint_code_ = Region::kFirstHandle + k;
+    } else {
+      paint_code_ = c.args[0] == "fixed" ? Region::kFixed : Region::kFree;
+    }
+    const int before = static_cast<int>(std::count(edit_.region.codes().begin(), edit_.region.codes().end(), paint_code_));
+    if (v == "paint") {
+      tool_ = Tool::Brush;
+      brush_radius_ = static_cast<float>(number(first + 2));
+      pointer_down(0, Vec2(number(first), number(first + 1)), false);
+    } else {
+      tool_ = Tool::Lasso;
+      pointer_down(0, Vec2(number(first), number(first + 1)), false);
+      for (size_t i = first + 2; i + 1 < c.args.size(); i += 2) pointer_move(Vec2(number(i), number(i + 1)));
+    }
+    pointer_up();
+    const int after = static_cast<int>(std::count(edit_.region.codes().begin(), edit_.region.codes().end(), paint_code_));
+    status("line " + std::to_string(c.line) + ": " + v + " " + c.args[0] + ": " + std::to_string(after) +
+           " vertices have that role (" + std::to_string(after - before) + " more)");
+  } else if (v == "color") {
+    coloring_ = c.args[0] == "region"     ? Coloring::Region
+                : c.args[0] == "rigidity" ? Coloring::Rigidity
+                : c.args[0] == "detail"   ? Coloring::Detail
+                                          : Coloring::None;
+    recolor();
+  } else if (v == "shading") {
+    flat_shading_ = c.args[0] == "flat";
+  } else if (v == "converge") {
+    if (needs_prepare_) prepare(/*wait=*/true);
+    const auto start = Clock::now();
+    do frame();
+    while (iterating_ && ms_since(start) < 10000);
+    if (iterating_) throw InvalidInput("no convergence within 10 s");
+  } else if (v == "screenshot") {
+    if (needs_prepare_) prepare(/*wait=*/true);
+    if (needs_frame_) frame();
+    if (c.args.size() == 2)
+      window_shot_ = c.args[0];
+    else
+      write_screenshot(c.args[0]);
+  } else if (v == "save-mesh") {
+    save_mesh(X_, edit_.F, c.args[0]);
+  } else if (v == "save-sel") {
+    write_sel(edit_.region, c.args[0]);
+  } else if (v == "save-def") {
+    write_def(transforms_, c.args[0]);
+  } else if (v == "reset") {
+    std::fill(transforms_.begin(), transforms_.end(), Mat4::Identity());
+    needs_frame_ = true;
+  }
+}
+
+bool Viewer::step_script() {
+  if (script_index_ >= script_.size() || script_failed_) return false;
+  const ScriptCommand& c = script_[script_index_];
+  if (script_step_ == 0) command_frame_ms_.clear();
+  bool done = true;
+  try {
+    if (needs_prepare_)
+      prepare(/*wait=*/true);
+    else
+      finish_prepare(/*wait=*/true);  // one the window's loop started
+    run_command_step(c, script_step_, done);
+    if (needs_frame_) frame();
+  } catch (const Error& e) {
+    std::fprintf(stderr, "view: %s:%d: %s: %s\n", options_.script.c_str(), c.line, c.verb.c_str(), e.what());
+    script_failed_ = true;
+    return false;
+  }
+  if (!error_.empty() && (c.verb == "translate" || c.verb == "rotate" || c.verb == "gizmo")) {
+    std::fprintf(stderr, "view: %s:%d: %s: %s\n", options_.script.c_str(), c.line, c.verb.c_str(), error_.c_str());
+    script_failed_ = true;
+    return false;
+  }
+  ++script_step_;
+  if (!done) return true;
+  if (!options_.quiet) {
+    std::string line = "line " + std::to_string(c.line) + ": " + c.verb;
+    for (const std::string& a : c.args) line += " " + a;
+    if (!command_frame_ms_.empty()) {
+      std::vector<double> t = command_frame_ms_;
+      std::sort(t.begin(), t.end());
+      char text[200];
+      std::snprintf(text, sizeof text, " (%zu frames of %s: median %.2f ms, max %.2f ms; draw %.1f ms)", t.size(),
+                    method_.c_str(), t[t.size() / 2], t.back(), draw_ms_);
+      line += text;
+      if (deformer_ && deformer_->frame_report().folded_faces > 0)
+        line += "; folded faces " + std::to_string(deformer_->frame_report().folded_faces);
+    }
+    std::printf("view: %s\n", line.c_str());
+    std::fflush(stdout);
+  }
+  ++script_index_;
+  script_step_ = 0;
+  return true;
+}
+
+int Viewer::run() {
+  bool scripted = !script_.empty();
+  while (!glfwWindowShouldClose(window_)) {
+    if (scripted || iterating_ || needs_frame_ || needs_prepare_ || preparing_.valid())
+      glfwPollEvents();
+    else
+      glfwWaitEventsTimeout(0.25);
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    if (scripted) {
+      scripted = step_script();
+      if (script_failed_) break;  // no --screenshot of a half-done script
+    } else {
+      poll_mouse();
+    }
+    finish_prepare(/*wait=*/false);
+    if (needs_prepare_ && !preparing_.valid()) prepare(/*wait=*/false);
+    const bool dragging = drag_part_ != GizmoPart::None;
+    if (needs_frame_) {
+      frame();
+    } else if (iterating_ && !dragging) {  // a nonlinear method goes on while the user looks
+      const auto start = Clock::now();
+      while (iterating_ && ms_since(start) < kIdleBudgetMs) frame();
+    }
+    if (!scripted && !options_.screenshot.empty()) {
+      write_screenshot(options_.screenshot);
+      std::printf("view: wrote %s\n", options_.screenshot.c_str());
+      break;
+    }
+    draw_panel();
+    draw_overlay();
+    const auto start = Clock::now();
+    draw_scene();
+    ImGui::Render();
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    if (!window_shot_.empty()) {
+      write_window_screenshot(window_shot_);
+      window_shot_.clear();
+    }
+    glfwSwapBuffers(window_);
+    draw_ms_ = ms_since(start);
+  }
+  return script_failed_ ? 1 : 0;
+}
+
+}  // namespace
+
+int run_viewer(const ViewerOptions& options) {
+  if (options.edit.F.rows() == 0)
+    throw InvalidInput("view: " + options.edit.name + " has no faces (the viewer draws triangle meshes)");
+  Viewer viewer(options);
+  return viewer.run();
+}
+
+}  // namespace msd::view

@@ -1,6 +1,7 @@
 // One figure of the performance summary per process, so each case reports its own peak memory:
 //   bench_summary bandwidth                   streamed GB/s (triad a = b + s·c, both cores, 3 × 512 MB)
-//   bench_summary CASE SIZE                   CASE: factorisation, shell, normal, vectors, transfer
+//   bench_summary CASE SIZE                   CASE: factorisation, factorisation-libigl (the peer's solver on
+//                                             the same matrix), shell, normal, vectors, transfer
 // Prints one line "case size vertices prepare_s frame_ms frame_min_ms peak_MB bytes_per_vertex extra" that
 // bench/run gathers into the table of the README's performance section. The scene is the bumpy plane's
 // `lift` edit; the multi-scale cases use the low-pass base at detail scale 0.3 (bench_multiscale's setting).
@@ -12,7 +13,10 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/SparseCholesky>
+
 #include "bench/bench_common.h"
+#include "msdeform/core/errors.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/memory.h"
 #include "msdeform/core/parallel.h"
@@ -65,7 +69,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (argc != 3) {
-    std::fprintf(stderr, "usage: bench_summary bandwidth | bench_summary factorisation|shell|normal|vectors|transfer SIZE\n");
+    std::fprintf(stderr, "usage: bench_summary bandwidth | bench_summary factorisation|factorisation-libigl|shell|normal|vectors|transfer SIZE\n");
     return 2;
   }
   const std::string size = argv[2];
@@ -74,11 +78,23 @@ int main(int argc, char** argv) {
   const msd::Scene scene = msd::make_scene("lift", options);
   const long nv = static_cast<long>(scene.P.rows());
 
-  if (what == "factorisation") {  // the shell's bi-Laplacian on the free vertices
+  if (what == "factorisation" || what == "factorisation-libigl") {  // the shell's bi-Laplacian on the free vertices
     const msd::LaplaceOperator lap = msd::cotan_laplacian(scene.P, scene.F);
     const auto free = scene.region.free_vertices();
     const msd::SparseMatrix A = msd::submatrix(msd::polyharmonic_matrix(lap, 2), free, free);
     const auto t0 = Clock::now();
+    if (what == "factorisation-libigl") {
+      // The peer: libigl's min_quad_with_fixed factors a positive definite system with Eigen's
+      // SimplicialLLT (AMD ordering). libigl is not packaged for Debian 12, so its solver runs here, from
+      // Debian's Eigen, on the same matrix.
+      const Eigen::SimplicialLLT<msd::SparseMatrix> llt(A);
+      if (llt.info() != Eigen::Success) throw msd::SolverError("SimplicialLLT failed");
+      const double seconds = seconds_since(t0);
+      char extra[96];
+      std::snprintf(extra, sizeof extra, "factor_nnz=%.3g", static_cast<double>(llt.matrixL().nestedExpression().nonZeros()));
+      print("factorisation-libigl", size, nv, seconds, {}, extra);
+      return 0;
+    }
     msd::SparseSPDSolver solver;
     solver.factor(A);
     char extra[96];

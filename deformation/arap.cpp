@@ -35,6 +35,12 @@ const char* to_string(ArapEnergy energy) {
   return energy == ArapEnergy::Spokes ? "spokes" : "spokes-and-rims";
 }
 
+void ArapDeformer::set_max_iterations(int max_iterations) {
+  if (max_iterations < 1)
+    throw InvalidInput("arap: max_iterations must be at least 1 (got " + std::to_string(max_iterations) + ")");
+  options_.max_iterations = max_iterations;
+}
+
 ArapDeformer::ArapDeformer(ArapOptions options) : options_(options) {
   if (options_.max_iterations < 1)
     throw InvalidInput("arap: max_iterations must be at least 1 (got " + std::to_string(options_.max_iterations) + ")");

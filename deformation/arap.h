@@ -77,6 +77,10 @@ class ArapDeformer : public Deformer {
   //! Surface, iterative, exact constraints, per-vertex targets, initial guess, reproduces rigid motions.
   DeformerTraits traits() const override;
   const ArapOptions& options() const { return options_; }
+  //! The iteration limit of the next frames (options().max_iterations), changed without preparing again:
+  //! msdeform view runs a few iterations per drawn frame while a handle is dragged and many while the mouse
+  //! rests. Frames stay allocation-free up to the limit given at prepare(). \throw InvalidInput for < 1.
+  void set_max_iterations(int max_iterations);
 
   //! The energy measured at each local step of the last frame: entry k is E(x_k, R_k+1), x_0 the
   //! initial guess with the constrained vertices at their targets. One entry more than

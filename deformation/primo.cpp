@@ -38,6 +38,12 @@ constexpr double kMaxTurn = 0.5;
 
 }  // namespace
 
+void PrimoDeformer::set_max_iterations(int max_iterations) {
+  if (max_iterations < 1)
+    throw InvalidInput("primo: max_iterations must be >= 1 (got " + std::to_string(max_iterations) + ")");
+  options_.max_iterations = max_iterations;
+}
+
 PrimoDeformer::PrimoDeformer(PrimoOptions options) : options_(options) {
   if (!std::isfinite(options_.thickness) || !(options_.thickness > 0))
     throw InvalidInput("primo: the thickness must be finite and > 0 (got " + std::to_string(options_.thickness) + ")");

@@ -64,6 +64,10 @@ class PrimoDeformer : public LocalFrameDeformer {
   //! fitted to the guess's faces), no per-vertex targets.
   DeformerTraits traits() const override;
   const PrimoOptions& options() const { return options_; }
+  //! The iteration limit of the next frames (options().max_iterations), changed without preparing again:
+  //! msdeform view runs a few iterations per drawn frame while a handle is dragged and many while the mouse
+  //! rests. Frames stay allocation-free up to the limit given at prepare(). \throw InvalidInput for < 1.
+  void set_max_iterations(int max_iterations);
 
   //! The energy E after each iteration of the last continuation stage of the last frame (the one with the
   //! target constraints), preceded by the energy it started from; empty before the first frame. Measured

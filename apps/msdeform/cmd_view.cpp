@@ -36,17 +36,28 @@ void add_view_command(CLI::App& app) {
   cmd->add_option("--screenshot", *screenshot, "After the script: write the 3D view to this PNG and exit");
   cmd->add_option("--size", *size, "Window width and height in pixels")->expected(2)->check(CLI::Range(400, 8192));
   cmd->add_option("--iterations-per-frame", *per_frame,
-                  "arap, primo: iterations per drawn frame (they go on while the mouse rests until converged)")
+                  "arap, primo: iterations per drawn frame while a handle is dragged; while the mouse rests they go "
+                  "on in longer runs (up to --iterations) until they converge")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_flag("-q,--quiet", *quiet, "No line per script command");
   cmd->callback([=] {
 #ifdef MSD_HAVE_VIEWER
     if (!screenshot->empty()) check_picture_output(*screenshot, "--screenshot");
+    if ((*size)[0] < 700) throw InvalidInput("--size: the window needs a width of 700 pixels or more (the panel takes 380)");
     view::ViewerOptions o;
-    o.edit = edit->load(/*need_transforms=*/false, /*need_region=*/false);
+    // A --def is read (with its --sel) when given; without one the handles start at rest.
+    const bool def_given = !edit->def.empty();
+    o.edit = edit->load(/*need_transforms=*/def_given, /*need_region=*/def_given);
     o.method = method->method_name();
     o.settings = method->method_settings(o.edit);
+    method->make(o.edit);  // an unknown method or invalid settings are refused before the window opens
+    if (o.method == "arap" || o.method == "primo") {
+      const double tolerance = o.method == "arap" ? o.settings.arap.tolerance : o.settings.primo.tolerance;
+      if (tolerance == 0)
+        throw InvalidInput("--tolerance 0 asks for a fixed number of iterations, but the viewer iterates until the "
+                           "method converges: give a positive tolerance");
+    }
     o.iterations_per_frame = *per_frame;
     RenderOptions r;
     camera->apply(o.edit.P, o.edit.region, r);
@@ -57,6 +68,8 @@ void add_view_command(CLI::App& app) {
     o.script = *script;
     o.screenshot = *screenshot;
     o.quiet = *quiet;
+    o.inputs = {edit->mesh, edit->sel, edit->def, *script};
+    for (const std::string& f : edit->region.input_files()) o.inputs.push_back(f);
     if (const int status = view::run_viewer(o); status != 0) std::exit(status);
 #else
     throw UsageError("this msdeform was built without the viewer: install libglfw3-dev and libimgui-dev "

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -60,7 +61,9 @@ void OrbitCamera::pan(double dx_pixels, double dy_pixels) {
   target_ += (-dx_pixels * right() + dy_pixels * screen_up()) * s;
 }
 
-void OrbitCamera::zoom(double steps) { distance_ = std::max(distance_ * std::pow(0.9, steps), 1e-3 * radius_); }
+void OrbitCamera::zoom(double steps) {
+  distance_ = std::clamp(distance_ * std::pow(0.9, steps), 1e-3 * radius_, 1e3 * radius_);
+}
 
 Vec3 OrbitCamera::eye() const {
   const Vec3 towards_camera =
@@ -249,6 +252,10 @@ double script_number(const ScriptCommand& command, size_t i, const std::string& 
 }
 
 std::vector<ScriptCommand> read_script(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw InvalidInput(path + ": cannot open the script (not a file)");
+  if (std::filesystem::file_size(path, ec) > (1u << 20))
+    throw InvalidInput(path + ": a script of more than 1 MB is not a list of commands");
   std::ifstream in(path);
   if (!in) throw InvalidInput(path + ": cannot open the script");
   // verb -> (fewest, most) arguments, and which must be numbers (from the first numeric one on)
@@ -256,16 +263,21 @@ std::vector<ScriptCommand> read_script(const std::string& path) {
     size_t fewest, most;
     size_t first_number;  // arguments from this index on are numbers
   };
+  constexpr size_t kAny = static_cast<size_t>(-1);
   const std::map<std::string, Rule> rules = {
       {"method", {1, 1, 1}},      {"handle", {1, 1, 0}},     {"translate", {3, 4, 0}},  {"rotate", {4, 5, 0}},
       {"gizmo", {4, 5, 2}},       {"orbit", {2, 2, 0}},      {"zoom", {1, 1, 0}},       {"paint", {4, 5, 1}},
-      {"lasso", {1, 1000, 1}},    {"color", {1, 1, 1}},      {"shading", {1, 1, 1}},    {"converge", {0, 0, 0}},
+      {"lasso", {1, kAny, 1}},    {"color", {1, 1, 1}},      {"shading", {1, 1, 1}},    {"converge", {0, 0, 0}},
       {"screenshot", {1, 2, 2}},  {"save-mesh", {1, 1, 1}},  {"save-sel", {1, 1, 1}},   {"save-def", {1, 1, 1}},
       {"reset", {0, 0, 0}}};
   std::vector<ScriptCommand> commands;
   std::string text;
   for (int line = 1; std::getline(in, text); ++line) {
+    if (line == 1 && text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);  // a UTF-8 byte-order mark
     text = text.substr(0, text.find('#'));
+    for (const char ch : text)
+      if (static_cast<unsigned char>(ch) < 32 && ch != '\t' && ch != '\r')
+        throw InvalidInput(path + ":" + std::to_string(line) + ": not text (a control character)");
     std::istringstream words(text);
     ScriptCommand c;
     c.line = line;
@@ -281,7 +293,7 @@ std::vector<ScriptCommand> read_script(const std::string& path) {
     if (c.args.size() < rule->second.fewest || c.args.size() > rule->second.most)
       throw InvalidInput(where + "'" + c.verb + "' takes " + std::to_string(rule->second.fewest) +
                          (rule->second.most != rule->second.fewest
-                              ? " to " + (rule->second.most == 1000 ? std::string("any number of")
+                              ? " to " + (rule->second.most == kAny ? std::string("any number of")
                                                                     : std::to_string(rule->second.most))
                               : std::string()) +
                          " arguments, found " + std::to_string(c.args.size()));
@@ -315,6 +327,24 @@ std::vector<ScriptCommand> read_script(const std::string& path) {
     for (const char* counted : {"handle", "zoom"})
       if (c.verb == counted && script_number(c, 0, path) != std::floor(script_number(c, 0, path)))
         throw InvalidInput(where + "'" + c.verb + "' takes a whole number");
+    const bool handle_role = (c.verb == "paint" || c.verb == "lasso") && c.args[0] == "handle";
+    if (c.verb == "handle" || handle_role) {
+      const double k = script_number(c, handle_role ? 1 : 0, path);
+      if (k != std::floor(k) || k < 0 || k > 1e6)
+        throw InvalidInput(where + "a handle is a whole number from 0, not " + c.args[handle_role ? 1 : 0]);
+    }
+    // STEPS: the optional last argument of translate (4th), rotate (5th) and gizmo (5th).
+    const size_t steps_at = c.verb == "translate" ? 3 : (c.verb == "rotate" || c.verb == "gizmo") ? 4 : 0;
+    if (steps_at && c.args.size() > steps_at) {
+      const double steps = script_number(c, steps_at, path);
+      if (steps != std::floor(steps) || steps < 1 || steps > 10000)
+        throw InvalidInput(where + "STEPS is a whole number from 1 to 10000, not " + c.args[steps_at]);
+    }
+    if (c.verb == "rotate" && script_number(c, 0, path) == 0 && script_number(c, 1, path) == 0 &&
+        script_number(c, 2, path) == 0)
+      throw InvalidInput(where + "the rotation axis is zero");
+    if (c.verb == "zoom" && std::abs(script_number(c, 0, path)) > 100)
+      throw InvalidInput(where + "zoom takes -100 to 100 steps");
     commands.push_back(std::move(c));
   }
   return commands;

@@ -25,6 +25,7 @@
 #include "msdeform/analysis/render.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh.h"
+#include "msdeform/core/atomic_file.h"
 #include "msdeform/core/mesh_io.h"
 
 namespace msd::view {
@@ -34,7 +35,7 @@ using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
 constexpr int kPanelWidth = 380;
-constexpr double kIdleBudgetMs = 30;  // iterations of a nonlinear method per drawn frame while idle
+constexpr double kIdleBudgetMs = 150;  // how long a nonlinear method iterates per drawn frame while idle
 
 const char* kVertexShader = R"(#version 330 core
 layout(location = 0) in vec3 position;
@@ -99,7 +100,14 @@ class Viewer {
   void region_changed();  // renumbers handles, resizes transforms, re-prepares
   void prepare(bool wait);         // starts preparing on a worker thread (wait: until it is done)
   void finish_prepare(bool wait);  // installs the prepared method once the worker is done
-  void frame();
+  // One frame of the method; iterative methods run at most iteration_limit iterations.
+  void frame(int iteration_limit);
+  void frame() { frame(options_.iterations_per_frame); }
+  void set_iteration_limit(int limit);
+  int full_iteration_limit() const {  // --iterations: the longest run of a nonlinear method
+    return method_ == "primo" ? options_.settings.primo.max_iterations : options_.settings.arap.max_iterations;
+  }
+  void iterate_while_idle();
   void recolor();
   Vec3 handle_center(int k) const;
   Gizmo gizmo() const;
@@ -119,7 +127,23 @@ class Viewer {
   void upload_colors();
   DepthImage read_depth();
   void write_screenshot(const std::string& path);
+  // Before writing a file: the extension of its kind (".png", ".sel", ".def", or "mesh"), writable, not
+  // read-only, and none of the files the viewer read. \throw InvalidInput naming the path.
+  void check_output(const std::string& path, const std::string& kind) const;
   void write_window_screenshot(const std::string& path);
+  void save_result(const std::string& path) {
+    check_output(path, "mesh");
+    save_mesh(X_, edit_.F, path);
+  }
+  void save_region(const std::string& path) {
+    check_output(path, ".sel");
+    write_sel(edit_.region, path);
+  }
+  void save_transforms(const std::string& path) {
+    if (transforms_.empty()) throw InvalidInput(path + ": there is no handle, so no transform to save");
+    check_output(path, ".def");
+    write_def(transforms_, path);
+  }
 
   // --- scripted mode ---
   bool step_script();  // one step of the current command; false when the script is done
@@ -127,6 +151,7 @@ class Viewer {
 
   void status(const std::string& text) {
     status_ = text;
+    if (deformer_ || edit_.region.num_handles() == 0) error_.clear();  // a success replaces an old error
     if (!options_.script.empty() && !options_.quiet) std::printf("view: %s\n", text.c_str());
   }
 
@@ -253,6 +278,7 @@ Viewer::~Viewer() {
 
 void Viewer::set_mesh(EditCase edit) {
   if (edit.F.rows() == 0) throw InvalidInput("view: " + edit.name + " has no faces (the viewer draws triangle meshes)");
+  if (edit.region.num_vertices() > 0) edit.region.validate(static_cast<int>(edit.P.rows()));  // e.g. handle codes with gaps
   edit_ = std::move(edit);
   mesh_path_ = edit_.path;
   X_ = edit_.P;
@@ -317,10 +343,7 @@ void Viewer::prepare(bool wait) {
     return;
   }
   try {
-    MethodSettings s = options_.settings;
-    s.arap.max_iterations = options_.iterations_per_frame;
-    s.primo.max_iterations = options_.iterations_per_frame;
-    auto d = builtin_methods().make(method_, s);
+    auto d = builtin_methods().make(method_, options_.settings);  // frames set their own iteration limits
     if (d->traits().domain == DeformerDomain::Surface) require_surface(edit_, method_);
     d->set_progress([phase = phase_](const std::string& line) {
       const std::lock_guard<std::mutex> lock(phase->mutex);
@@ -371,10 +394,16 @@ void Viewer::finish_prepare(bool wait) {
   needs_frame_ = true;
 }
 
-void Viewer::frame() {
+void Viewer::set_iteration_limit(int limit) {
+  if (auto* arap = dynamic_cast<ArapDeformer*>(deformer_.get())) arap->set_max_iterations(limit);
+  if (auto* primo = dynamic_cast<PrimoDeformer*>(deformer_.get())) primo->set_max_iterations(limit);
+}
+
+void Viewer::frame(int iteration_limit) {
   needs_frame_ = false;
   if (!deformer_) return;
   try {
+    set_iteration_limit(iteration_limit);
     const auto start = Clock::now();
     deformer_->deform(transforms_, X_);
     frame_ms_ = ms_since(start);
@@ -387,6 +416,16 @@ void Viewer::frame() {
     error_ = e.what();
     iterating_ = false;
   }
+}
+
+void Viewer::iterate_while_idle() {
+  // Runs as long as fit in the time budget, measured from the last frame: long runs keep the method's
+  // acceleration (ARAP's Anderson history restarts with every frame), short ones keep the window alive.
+  const int done = std::max(deformer_ ? deformer_->frame_report().iterations : 1, 1);
+  const double per_iteration = std::max(frame_ms_ / done, 1e-3);
+  const int limit = std::clamp(static_cast<int>(kIdleBudgetMs / per_iteration), options_.iterations_per_frame,
+                               full_iteration_limit());
+  frame(limit);
 }
 
 void Viewer::recolor() {
@@ -404,7 +443,8 @@ void Viewer::recolor() {
         if (!detail_) throw InvalidInput("detail change needs free vertices");
         metric_ = detail_->measure(X_).per_vertex;
       }
-      const auto [lo, hi] = robust_scalar_range(metric_);
+      auto [lo, hi] = robust_scalar_range(metric_);
+      hi = std::max(hi, lo + 1e-9);  // at rest: round-off, not a pattern to colour
       colors.resize(metric_.size(), 3);
       for (Eigen::Index v = 0; v < metric_.size(); ++v)
         colors.row(v) = viridis((metric_[v] - lo) / std::max(hi - lo, 1e-300)).transpose();
@@ -570,6 +610,7 @@ DepthImage Viewer::read_depth() {
 }
 
 void Viewer::write_screenshot(const std::string& path) {
+  check_output(path, ".png");
   draw_scene();
   glFinish();
   Image image(camera_.width(), camera_.height());
@@ -581,7 +622,23 @@ void Viewer::write_screenshot(const std::string& path) {
   write_png(image, path);
 }
 
+void Viewer::check_output(const std::string& path, const std::string& kind) const {
+  if (kind == "mesh")
+    check_mesh_format(path, "view");
+  else if (file_extension(path) != kind)
+    throw InvalidInput(path + ": this file is written in the " + kind + " format; name it NAME" + kind);
+  check_writable(path, "view");
+  std::vector<std::string> inputs = options_.inputs;
+  inputs.push_back(edit_.path);
+  for (const std::string& input : inputs) {
+    std::error_code ec;
+    if (!input.empty() && std::filesystem::equivalent(path, input, ec))
+      throw InvalidInput(path + " is one of the files the viewer read; it is not replaced (save under another name)");
+  }
+}
+
 void Viewer::write_window_screenshot(const std::string& path) {
+  check_output(path, ".png");
   int w = 0, h = 0;
   glfwGetFramebufferSize(window_, &w, &h);
   Image image(w, h);
@@ -646,11 +703,11 @@ void Viewer::draw_panel() {
     const MethodEntry& entry = builtin_methods().find(method_);
     ImGui::TextWrapped("%s (seed %s)", entry.summary.c_str(), entry.section.c_str());
     if (method_ == "arap" || method_ == "primo") {
-      if (ImGui::SliderInt("iterations/frame", &options_.iterations_per_frame, 1, 50)) needs_prepare_ = true;
+      ImGui::SliderInt("iterations/frame", &options_.iterations_per_frame, 1, 50, "%d", ImGuiSliderFlags_AlwaysClamp);
     }
     if (method_ == "shell" || method_.rfind("multiscale", 0) == 0) {
       float k = static_cast<float>(options_.settings.shell.ks);
-      if (ImGui::SliderFloat("stretching k_s", &k, 0, 10)) {
+      if (ImGui::SliderFloat("stretching k_s", &k, 0, 10, "%.2f", ImGuiSliderFlags_AlwaysClamp)) {
         options_.settings.shell.ks = k;
         needs_prepare_ = true;
       }
@@ -669,7 +726,11 @@ void Viewer::draw_panel() {
       for (const std::string& warning : r.warnings)
         if (!iterating_) ImGui::TextWrapped("warning: %s", warning.c_str());
     }
-    if (!error_.empty()) ImGui::TextColored(ImVec4(0.75f, 0.05f, 0.05f, 1), "%s", error_.c_str());
+    if (!error_.empty()) {
+      ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(0.75f, 0.05f, 0.05f, 1));
+      ImGui::TextWrapped("%s", error_.c_str());
+      ImGui::PopStyleColor();
+    }
   }
 
   if (ImGui::CollapsingHeader("Tool", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -692,7 +753,7 @@ void Viewer::draw_panel() {
         if (ImGui::Selectable(roles[i].c_str(), i == role)) paint_code_ = i;
       ImGui::EndCombo();
     }
-    ImGui::SliderFloat("brush radius", &brush_radius_, 2, 200, "%.0f px");
+    ImGui::SliderFloat("brush radius", &brush_radius_, 2, 200, "%.0f px", ImGuiSliderFlags_AlwaysClamp);
     if (ImGui::Button("reset handles")) {
       std::fill(transforms_.begin(), transforms_.end(), Mat4::Identity());
       needs_frame_ = true;
@@ -713,6 +774,10 @@ void Viewer::draw_panel() {
     }
     if (!metric_text_.empty()) ImGui::TextWrapped("%s", metric_text_.c_str());
     ImGui::Checkbox("flat shading", &flat_shading_);
+    ImGui::SameLine();
+    if (ImGui::Button("reset view")) {
+      camera_.frame(edit_.P, options_.up, options_.view_direction, camera_.width(), camera_.height());
+    }
   }
 
   if (ImGui::CollapsingHeader("Files")) {
@@ -731,23 +796,22 @@ void Viewer::draw_panel() {
         status("loaded " + mesh_path_);
       }
       if (row("result", out_path_, "save")) {
-        std::error_code ec;
-        if (!edit_.path.empty() && std::filesystem::equivalent(out_path_, edit_.path, ec))
-          throw InvalidInput(out_path_ + " is the input mesh: save the result under another name");
-        save_mesh(X_, edit_.F, out_path_);
+        save_result(out_path_);
         status("saved " + out_path_);
       }
       if (row(".sel", sel_path_, "save")) {
-        write_sel(edit_.region, sel_path_);
+        save_region(sel_path_);
         status("saved " + sel_path_);
       }
       if (ImGui::Button("load .sel")) {
-        edit_.region = read_sel(sel_path_, static_cast<int>(edit_.P.rows()));
+        Region r = read_sel(sel_path_, static_cast<int>(edit_.P.rows()));
+        r.validate(static_cast<int>(edit_.P.rows()));
+        edit_.region = r;
         region_changed();
         status("loaded " + sel_path_);
       }
       if (row(".def", def_path_, "save")) {
-        write_def(transforms_, def_path_);
+        save_transforms(def_path_);
         status("saved " + def_path_);
       }
       if (ImGui::Button("load .def")) {
@@ -831,6 +895,8 @@ void Viewer::run_command_step(const ScriptCommand& c, int step, bool& done) {
     }
     if (c.args[1] == "center" && tool_ == Tool::Rotate) start = center + Vec2(g.ring_pixels(), 0);  // on the ring
     if (step == 0) {
+      if (start.x() < 0 || start.y() < 0 || start.x() >= camera_.width() || start.y() >= camera_.height())
+        throw InvalidInput("the gizmo is outside the 3D view (orbit, pan or zoom to bring it in)");
       pointer_down(0, start, false);
       if (drag_part_ == GizmoPart::None) throw InvalidInput("the gizmo part is not under the cursor");
       done = false;
@@ -883,7 +949,7 @@ void Viewer::run_command_step(const ScriptCommand& c, int step, bool& done) {
   } else if (v == "converge") {
     if (needs_prepare_) prepare(/*wait=*/true);
     const auto start = Clock::now();
-    do frame();
+    do frame(full_iteration_limit());
     while (iterating_ && ms_since(start) < 10000);
     if (iterating_) throw InvalidInput("no convergence within 10 s");
   } else if (v == "screenshot") {
@@ -894,11 +960,11 @@ void Viewer::run_command_step(const ScriptCommand& c, int step, bool& done) {
     else
       write_screenshot(c.args[0]);
   } else if (v == "save-mesh") {
-    save_mesh(X_, edit_.F, c.args[0]);
+    save_result(c.args[0]);
   } else if (v == "save-sel") {
-    write_sel(edit_.region, c.args[0]);
+    save_region(c.args[0]);
   } else if (v == "save-def") {
-    write_def(transforms_, c.args[0]);
+    save_transforms(c.args[0]);
   } else if (v == "reset") {
     std::fill(transforms_.begin(), transforms_.end(), Mat4::Identity());
     needs_frame_ = true;
@@ -915,6 +981,7 @@ bool Viewer::step_script() {
       prepare(/*wait=*/true);
     else
       finish_prepare(/*wait=*/true);  // one the window's loop started
+    if (!deformer_ && edit_.region.num_handles() > 0) throw InvalidInput("the method could not be prepared: " + error_);
     run_command_step(c, script_step_, done);
     if (needs_frame_) frame();
   } catch (const Error& e) {
@@ -941,6 +1008,8 @@ bool Viewer::step_script() {
       line += text;
       if (deformer_ && deformer_->frame_report().folded_faces > 0)
         line += "; folded faces " + std::to_string(deformer_->frame_report().folded_faces);
+      if (deformer_ && !iterating_)
+        for (const std::string& w : deformer_->frame_report().warnings) line += "\n  warning: " + w;
     }
     std::printf("view: %s\n", line.c_str());
     std::fflush(stdout);
@@ -956,7 +1025,7 @@ int Viewer::run() {
     if (scripted || iterating_ || needs_frame_ || needs_prepare_ || preparing_.valid())
       glfwPollEvents();
     else
-      glfwWaitEventsTimeout(0.25);
+      glfwWaitEvents();  // nothing to do until the user acts
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
@@ -971,11 +1040,16 @@ int Viewer::run() {
     const bool dragging = drag_part_ != GizmoPart::None;
     if (needs_frame_) {
       frame();
-    } else if (iterating_ && !dragging) {  // a nonlinear method goes on while the user looks
-      const auto start = Clock::now();
-      while (iterating_ && ms_since(start) < kIdleBudgetMs) frame();
+    } else if (iterating_ && !dragging && !scripted) {  // scripts iterate only when told (converge)
+      iterate_while_idle();
     }
     if (!scripted && !options_.screenshot.empty()) {
+      finish_prepare(/*wait=*/true);
+      if (needs_frame_) frame();
+      if (!error_.empty() && edit_.region.num_handles() > 0) {
+        std::fprintf(stderr, "view: %s\n", error_.c_str());
+        return 1;
+      }
       write_screenshot(options_.screenshot);
       std::printf("view: wrote %s\n", options_.screenshot.c_str());
       break;

@@ -3,6 +3,7 @@
 // library's catalogue of methods. Built only when GLFW and Debian's imgui are found (MSD_HAVE_VIEWER).
 
 #include <string>
+#include <vector>
 
 #include "msdeform/core/edit_case.h"
 #include "msdeform/reconstruction/catalogue.h"
@@ -20,6 +21,7 @@ struct ViewerOptions {
   std::string script;      // commands run one per drawn frame (interaction.h, read_script)
   std::string screenshot;  // after the script: the 3D view to this PNG, then exit
   bool quiet = false;      // no per-command lines on stdout in the scripted mode
+  std::vector<std::string> inputs;  // files the viewer read (mesh, region, transforms, script): never written
 };
 
 // Opens the window and runs until it is closed (or the scripted run ends with a screenshot). Prints what

@@ -411,7 +411,8 @@ void Viewer::frame(int iteration_limit) {
     const FrameReport& r = deformer_->frame_report();
     iterating_ = deformer_->traits().solve == DeformerSolve::Iterative && !r.converged;
     upload_positions();
-    if (coloring_ == Coloring::Rigidity || coloring_ == Coloring::Detail) recolor();
+    // A metric map costs more than a frame (detail change fairs S'): drawn when the handle is let go.
+    if ((coloring_ == Coloring::Rigidity || coloring_ == Coloring::Detail) && drag_part_ == GizmoPart::None) recolor();
   } catch (const Error& e) {
     error_ = e.what();
     iterating_ = false;
@@ -551,9 +552,11 @@ void Viewer::pointer_move(const Vec2& p) {
 void Viewer::pointer_up() {
   if (drag_button_ == 0 && tool_ == Tool::Lasso) paint_role(lasso_select(stroke_screen_, lasso_, stroke_depth_));
   if (drag_button_ == 0 && (tool_ == Tool::Brush || tool_ == Tool::Lasso)) region_changed();
+  const bool moved_handle = drag_part_ != GizmoPart::None;
   lasso_.clear();
   drag_button_ = -1;
   drag_part_ = GizmoPart::None;
+  if (moved_handle && (coloring_ == Coloring::Rigidity || coloring_ == Coloring::Detail)) recolor();
 }
 
 void Viewer::poll_mouse() {

@@ -45,6 +45,9 @@ void add_view_command(CLI::App& app) {
 #ifdef MSD_HAVE_VIEWER
     if (!screenshot->empty()) check_picture_output(*screenshot, "--screenshot");
     if ((*size)[0] < 700) throw InvalidInput("--size: the window needs a width of 700 pixels or more (the panel takes 380)");
+    for (const auto& [path, option] : {std::pair{edit->region.write_sel, "--write-sel"}, {edit->region.write_def, "--write-def"}})
+      if (!path.empty() && !script->empty() && same_file(path, *script))
+        throw InvalidInput(std::string(option) + " " + path + " is the --script; it would be replaced");
     view::ViewerOptions o;
     // A --def is read (with its --sel) when given; without one the handles start at rest.
     const bool def_given = !edit->def.empty();

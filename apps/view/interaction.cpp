@@ -340,9 +340,11 @@ std::vector<ScriptCommand> read_script(const std::string& path) {
       if (steps != std::floor(steps) || steps < 1 || steps > 10000)
         throw InvalidInput(where + "STEPS is a whole number from 1 to 10000, not " + c.args[steps_at]);
     }
-    if (c.verb == "rotate" && script_number(c, 0, path) == 0 && script_number(c, 1, path) == 0 &&
-        script_number(c, 2, path) == 0)
-      throw InvalidInput(where + "the rotation axis is zero");
+    if (c.verb == "rotate" &&
+        !(Vec3(script_number(c, 0, path), script_number(c, 1, path), script_number(c, 2, path)).norm() > 1e-12))
+      throw InvalidInput(where + "the rotation axis is zero (or too short to have a direction)");
+    if (c.verb == "paint" && !(script_number(c, c.args.size() - 1, path) > 0))
+      throw InvalidInput(where + "the brush radius is a positive number of pixels");
     if (c.verb == "zoom" && std::abs(script_number(c, 0, path)) > 100)
       throw InvalidInput(where + "zoom takes -100 to 100 steps");
     commands.push_back(std::move(c));

@@ -27,6 +27,7 @@
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/atomic_file.h"
 #include "msdeform/core/mesh_io.h"
+#include "msdeform/core/rotation.h"
 
 namespace msd::view {
 namespace {
@@ -98,6 +99,7 @@ class Viewer {
   // --- editing state ---
   void set_mesh(EditCase edit);
   void region_changed();  // renumbers handles, resizes transforms, re-prepares
+  Mat4 shown_pose(int code, const std::vector<int>& codes) const;
   void prepare(bool wait);         // starts preparing on a worker thread (wait: until it is done)
   void finish_prepare(bool wait);  // installs the prepared method once the worker is done
   // One frame of the method; iterative methods run at most iteration_limit iterations.
@@ -223,6 +225,17 @@ class Viewer {
 
 Viewer::Viewer(const ViewerOptions& options) : options_(options), method_(options.method) {
   if (!options_.script.empty()) script_ = read_script(options_.script);  // before a window opens
+  for (const ScriptCommand& c : script_) {
+    try {
+      if (c.verb == "method") builtin_methods().find(c.args[0]);
+      if (c.verb == "save-mesh") check_output(c.args[0], "mesh");
+      if (c.verb == "save-sel") check_output(c.args[0], ".sel");
+      if (c.verb == "save-def") check_output(c.args[0], ".def");
+      if (c.verb == "screenshot") check_output(c.args[0], ".png");
+    } catch (const Error& e) {
+      throw InvalidInput(options_.script + ":" + std::to_string(c.line) + ": " + e.what());
+    }
+  }
   if (!glfwInit()) throw UsageError("view: GLFW could not start (is there a display? run under xvfb-run without one)");
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
@@ -316,7 +329,7 @@ void Viewer::region_changed() {
     const int old_handle = old_code - Region::kFirstHandle;
     new_code = Region::kFirstHandle + static_cast<int>(transforms.size());
     transforms.push_back(old_handle < static_cast<int>(transforms_.size()) ? transforms_[old_handle]
-                                                                           : Mat4::Identity());
+                                                                           : shown_pose(old_code, codes));
   }
   for (int& c : codes)
     if (c >= Region::kFirstHandle) c = renumber[c];
@@ -330,6 +343,31 @@ void Viewer::region_changed() {
   }
   needs_prepare_ = true;
   recolor();
+}
+
+Mat4 Viewer::shown_pose(int code, const std::vector<int>& codes) const {
+  // The rigid motion that best maps the rest positions of the vertices with `code` to where they are shown
+  // (Kabsch), so painting a new handle on a deformed shape does not send it back to rest.
+  Vec3 rest_centre = Vec3::Zero(), shown_centre = Vec3::Zero();
+  int n = 0;
+  for (size_t v = 0; v < codes.size(); ++v)
+    if (codes[v] == code) {
+      rest_centre += edit_.P.row(v).transpose();
+      shown_centre += X_.row(v).transpose();
+      ++n;
+    }
+  Mat4 T = Mat4::Identity();
+  if (n == 0 || X_.rows() != edit_.P.rows()) return T;
+  rest_centre /= n;
+  shown_centre /= n;
+  Mat3 covariance = Mat3::Zero();
+  for (size_t v = 0; v < codes.size(); ++v)
+    if (codes[v] == code)
+      covariance += (edit_.P.row(v).transpose() - rest_centre) * (X_.row(v).transpose() - shown_centre).transpose();
+  const Mat3 R = n >= 3 ? best_rotation(covariance) : Mat3::Identity();
+  T.topLeftCorner<3, 3>() = R;
+  T.topRightCorner<3, 1>() = shown_centre - R * rest_centre;
+  return T;
 }
 
 void Viewer::prepare(bool wait) {
@@ -388,6 +426,8 @@ void Viewer::finish_prepare(bool wait) {
   }
   deformer_ = std::move(r.deformer);
   deformer_->set_progress({});  // frames stay allocation-free
+  // An iterative method prepared again (a region painted, another method) goes on from the shape shown.
+  if (deformer_->traits().initial_guess && X_.rows() == edit_.P.rows() && X_ != edit_.P) deformer_->set_initial_guess(X_);
   prepare_ms_ = r.ms;
   status("prepared " + method_ + " in " + std::to_string(static_cast<int>(prepare_ms_)) + " ms");
   for (const std::string& w : deformer_->prepare_warnings()) status("warning: " + w);
@@ -861,7 +901,7 @@ void Viewer::run_command_step(const ScriptCommand& c, int step, bool& done) {
     builtin_methods().find(c.args[0]);  // throws, listing the known names
     method_ = c.args[0];
     prepare(/*wait=*/true);
-    if (!deformer_) throw InvalidInput(error_);
+    if (!deformer_ && edit_.region.num_handles() > 0) throw InvalidInput(error_);
   } else if (v == "handle") {
     const int k = static_cast<int>(number(0));
     if (k < 0 || k >= edit_.region.num_handles())
@@ -985,6 +1025,7 @@ bool Viewer::step_script() {
     else
       finish_prepare(/*wait=*/true);  // one the window's loop started
     if (!deformer_ && edit_.region.num_handles() > 0) throw InvalidInput("the method could not be prepared: " + error_);
+    if (needs_frame_) frame();  // the shape shown (e.g. posed by --def) before the command runs
     run_command_step(c, script_step_, done);
     if (needs_frame_) frame();
   } catch (const Error& e) {

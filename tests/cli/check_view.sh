@@ -149,6 +149,35 @@ printf 'save-def none.def\n' >bad.txt
 expect_error 1 "there is no handle, so no transform to save" "${run_view[@]}" lift.off --script bad.txt
 [ ! -e none.def ] || fail "save-def with no handle wrote a file"
 
+printf 'reset\n' >script.sel
+expect_error 1 "--write-sel script.sel is the --script" "${run_view[@]}" lift.off --sel lift.sel --script script.sel \
+  --write-sel script.sel
+grep -q reset script.sel || fail "--write-sel replaced the script"
+printf 'translate 0 0 0.1\nsave-mesh lift.off\n' >bad.txt
+expect_error 1 "bad.txt:2: lift.off is one of the files the viewer read" "${run_view[@]}" lift.off --sel lift.sel \
+  --script bad.txt
+[ ! -e posed-first.off ] || rm posed-first.off
+
+# The shape shown is the shape saved, from the first line on; a handle painted on a deformed shape keeps
+# it where it is (its transform is the best rigid fit of where its vertices are shown).
+printf 'save-mesh posed-first.off\nconverge\nsave-mesh posed-before-paint.off\npaint handle 1 450 350 30\nconverge\nsave-mesh posed-after-paint.off\n' >paint.txt
+"${run_view[@]}" lift.off --sel lift.sel --def lift.def --method arap --size 1000 700 --script paint.txt \
+  --screenshot painted.png >out.txt 2>err.txt || { cat out.txt err.txt; fail "painting a posed shape"; }
+grep -q "paint handle: [1-9]" out.txt || { cat out.txt; fail "the brush painted nothing"; }
+/usr/bin/python3 - lift.off posed-first.off posed-before-paint.off posed-after-paint.off <<'EOF2' ||
+import sys
+def off(path):
+    words = open(path).read().split()
+    n = int(words[1])
+    return [tuple(map(float, words[4 + 3 * i:7 + 3 * i])) for i in range(n)]
+rest, first, before, after = (off(p) for p in sys.argv[1:])
+moved = max(abs(a[2] - b[2]) for a, b in zip(rest, first))
+assert moved > 0.1, f"line 1 saved the rest shape (largest move {moved})"
+change = max(max(abs(x - y) for x, y in zip(a, b)) for a, b in zip(before, after))
+assert change < 0.02, f"painting a handle moved the shape by {change}"
+EOF2
+  fail "the saved shape is not the one shown"
+
 # 5. Bad scripts and inputs: refused by name before a window opens, or at the command that fails.
 expect_error 1 "/dev/zero: cannot open the script (not a file)" "${run_view[@]}" lift.off --script /dev/zero
 printf 'translate 0 0 1 0\n' >bad.txt

@@ -165,6 +165,13 @@ TEST_CASE("scripts: commands read with their arguments, mistakes refused with th
   CHECK_THROWS_WITH(read_script(write("reset\nhandle 1.5\n")), Contains(name + "'handle' takes a whole number"));
   CHECK_THROWS_WITH(read_script(write("reset\ngizmo translate w 1 2\n")), Contains("x, y, z or center, not 'w'"));
   CHECK_THROWS_WITH(read_script(write("reset\ncolor pink\n")), Contains("region, rigidity, detail or none"));
+  CHECK_THROWS_WITH(read_script(write("reset\nrotate 0 0 1e-320 30\n")), Contains(name + "the rotation axis is zero"));
+  CHECK_THROWS_WITH(read_script(write("reset\npaint fixed 10 10 -5\n")), Contains(name + "the brush radius is a positive"));
+  CHECK_THROWS_WITH(read_script(write("reset\ntranslate 0 0 1 0\n")), Contains(name + "STEPS is a whole number"));
+  CHECK_THROWS_WITH(read_script(write("reset\nhandle 1e30\n")), Contains(name + "a handle is a whole number from 0"));
+  CHECK(read_script(write("\xEF\xBB\xBFreset\n")).size() == 1);  // a byte-order mark
+  CHECK_THROWS_WITH(read_script(write("reset\n\x01\x02\n")), Contains(name + "not text"));
   CHECK_THROWS_WITH(read_script(path + ".missing"), Contains("cannot open the script"));
+  CHECK_THROWS_WITH(read_script("/dev/zero"), Contains("not a file"));
   std::filesystem::remove(path);
 }

@@ -42,8 +42,7 @@ void ArapDeformer::set_max_iterations(int max_iterations) {
 }
 
 ArapDeformer::ArapDeformer(ArapOptions options) : options_(options) {
-  if (options_.max_iterations < 1)
-    throw InvalidInput("arap: max_iterations must be at least 1 (got " + std::to_string(options_.max_iterations) + ")");
+  set_max_iterations(options_.max_iterations);
   if (!(options_.tolerance >= 0) || !std::isfinite(options_.tolerance))
     throw InvalidInput("arap: tolerance must be finite and >= 0 (got " + std::to_string(options_.tolerance) + ")");
   if (options_.anderson < 0 || options_.anderson > 8)

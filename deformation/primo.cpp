@@ -47,8 +47,7 @@ void PrimoDeformer::set_max_iterations(int max_iterations) {
 PrimoDeformer::PrimoDeformer(PrimoOptions options) : options_(options) {
   if (!std::isfinite(options_.thickness) || !(options_.thickness > 0))
     throw InvalidInput("primo: the thickness must be finite and > 0 (got " + std::to_string(options_.thickness) + ")");
-  if (options_.max_iterations < 1)
-    throw InvalidInput("primo: max_iterations must be >= 1 (got " + std::to_string(options_.max_iterations) + ")");
+  set_max_iterations(options_.max_iterations);
   if (!std::isfinite(options_.tolerance) || options_.tolerance < 0)
     throw InvalidInput("primo: the tolerance must be finite and >= 0 (got " + std::to_string(options_.tolerance) + ")");
 }

@@ -105,8 +105,10 @@ Mat4 OrbitCamera::projection_matrix() const {
   return M;
 }
 
-Vec3 OrbitCamera::project(const Vec3& p) const {
-  const Eigen::Vector4d clip = projection_matrix() * view_matrix() * Eigen::Vector4d(p.x(), p.y(), p.z(), 1);
+Vec3 OrbitCamera::project(const Vec3& p) const { return project(projection_matrix() * view_matrix(), p); }
+
+Vec3 OrbitCamera::project(const Mat4& view_projection, const Vec3& p) const {
+  const Eigen::Vector4d clip = view_projection * Eigen::Vector4d(p.x(), p.y(), p.z(), 1);
   if (clip.w() <= 0) return Vec3(0, 0, -1);  // behind the eye
   const Vec3 ndc = clip.head<3>() / clip.w();
   return Vec3(0.5 * (ndc.x() + 1) * width_, 0.5 * (1 - ndc.y()) * height_, 0.5 * (ndc.z() + 1));
@@ -195,17 +197,9 @@ bool DepthImage::visible(double x, double y, double d, double tolerance) const {
 }
 
 Positions project_vertices(const OrbitCamera& camera, const Positions& P) {
-  const Mat4 M = camera.projection_matrix() * camera.view_matrix();
+  const Mat4 M = camera.projection_matrix() * camera.view_matrix();  // once, not per vertex
   Positions S(P.rows(), 3);
-  for (Eigen::Index v = 0; v < P.rows(); ++v) {
-    const Eigen::Vector4d clip = M * Eigen::Vector4d(P(v, 0), P(v, 1), P(v, 2), 1);
-    if (clip.w() <= 0) {
-      S.row(v) << 0, 0, -1;
-      continue;
-    }
-    const Vec3 ndc = clip.head<3>() / clip.w();
-    S.row(v) << 0.5 * (ndc.x() + 1) * camera.width(), 0.5 * (1 - ndc.y()) * camera.height(), 0.5 * (ndc.z() + 1);
-  }
+  for (Eigen::Index v = 0; v < P.rows(); ++v) S.row(v) = camera.project(M, P.row(v).transpose()).transpose();
   return S;
 }
 

@@ -40,6 +40,8 @@ class OrbitCamera {
   Mat4 projection_matrix() const;
   // Pixel coordinates and window depth of world point p (depth outside [0, 1] when it is clipped).
   Vec3 project(const Vec3& p) const;
+  // The same with projection_matrix() * view_matrix() computed once by the caller.
+  Vec3 project(const Mat4& view_projection, const Vec3& p) const;
   // World units per pixel at the distance of p from the eye (along the view direction).
   double pixel_size_at(const Vec3& p) const;
   int width() const { return width_; }

@@ -111,6 +111,8 @@ class Viewer {
   }
   void iterate_while_idle();
   void recolor();
+  bool metric_colors() const { return coloring_ == Coloring::Rigidity || coloring_ == Coloring::Detail; }
+  GizmoMode gizmo_mode() const { return tool_ == Tool::Rotate ? GizmoMode::Rotate : GizmoMode::Translate; }
   Vec3 handle_center(int k) const;
   Gizmo gizmo() const;
   void paint_role(const std::vector<int>& vertices);
@@ -133,6 +135,7 @@ class Viewer {
   // read-only, and none of the files the viewer read. \throw InvalidInput naming the path.
   void check_output(const std::string& path, const std::string& kind) const;
   void write_window_screenshot(const std::string& path);
+  void write_pixels_png(const std::string& path, int x0, int width, int height);  // the framebuffer's columns x0..
   void save_result(const std::string& path) {
     check_output(path, "mesh");
     save_mesh(X_, edit_.F, path);
@@ -452,7 +455,7 @@ void Viewer::frame(int iteration_limit) {
     iterating_ = deformer_->traits().solve == DeformerSolve::Iterative && !r.converged;
     upload_positions();
     // A metric map costs more than a frame (detail change fairs S'): drawn when the handle is let go.
-    if ((coloring_ == Coloring::Rigidity || coloring_ == Coloring::Detail) && drag_part_ == GizmoPart::None) recolor();
+    if (metric_colors() && drag_part_ == GizmoPart::None) recolor();
   } catch (const Error& e) {
     error_ = e.what();
     iterating_ = false;
@@ -470,12 +473,13 @@ void Viewer::iterate_while_idle() {
 }
 
 void Viewer::recolor() {
+  const Positions plain = RenderOptions{}.base_color.transpose().replicate(edit_.P.rows(), 1);
   Positions colors;
   metric_text_.clear();
   if (coloring_ == Coloring::Region) {
     colors = region_colors(edit_.region);
   } else if (coloring_ == Coloring::None) {
-    colors = RenderOptions{}.base_color.transpose().replicate(edit_.P.rows(), 1);
+    colors = plain;
   } else {
     try {
       if (coloring_ == Coloring::Rigidity) {
@@ -496,7 +500,7 @@ void Viewer::recolor() {
       metric_text_ = text;
     } catch (const Error& e) {
       metric_text_ = e.what();
-      colors = RenderOptions{}.base_color.transpose().replicate(edit_.P.rows(), 1);
+      colors = plain;
     }
   }
   upload_.resize(colors.size());
@@ -558,7 +562,7 @@ void Viewer::pointer_down(int button, const Vec2& p, bool shift) {
   const bool gizmo_tool = tool_ == Tool::Translate || tool_ == Tool::Rotate;
   if (gizmo_tool && deformer_ && edit_.region.num_handles() > 0) {
     drag_gizmo_ = gizmo();
-    drag_part_ = drag_gizmo_.pick(camera_, tool_ == Tool::Rotate ? GizmoMode::Rotate : GizmoMode::Translate, p);
+    drag_part_ = drag_gizmo_.pick(camera_, gizmo_mode(), p);
     drag_start_transform_ = transforms_[active_handle_];
   } else if (tool_ == Tool::Brush || tool_ == Tool::Lasso) {
     stroke_depth_ = read_depth();
@@ -579,7 +583,7 @@ void Viewer::pointer_move(const Vec2& p) {
              (drag_button_ == 0 && drag_part_ == GizmoPart::None && (tool_ == Tool::Translate || tool_ == Tool::Rotate))) {
     camera_.orbit(d.x(), d.y());
   } else if (drag_part_ != GizmoPart::None) {
-    const GizmoMode mode = tool_ == Tool::Rotate ? GizmoMode::Rotate : GizmoMode::Translate;
+    const GizmoMode mode = gizmo_mode();
     transforms_[active_handle_] = drag_gizmo_.drag(camera_, mode, drag_part_, drag_from_, p) * drag_start_transform_;
     needs_frame_ = true;
   } else if (tool_ == Tool::Brush) {
@@ -596,7 +600,7 @@ void Viewer::pointer_up() {
   lasso_.clear();
   drag_button_ = -1;
   drag_part_ = GizmoPart::None;
-  if (moved_handle && (coloring_ == Coloring::Rigidity || coloring_ == Coloring::Detail)) recolor();
+  if (moved_handle && metric_colors()) recolor();
 }
 
 void Viewer::poll_mouse() {
@@ -638,31 +642,38 @@ void Viewer::draw_scene() {
   glViewport(0, 0, w, h);
 }
 
+// width×height pixels of the framebuffer from column x0, `channels` values each, top row first (OpenGL's
+// rows start at the bottom).
+template <class T>
+std::vector<T> read_pixels(int x0, int width, int height, GLenum format, GLenum type, int channels) {
+  const size_t row = static_cast<size_t>(width) * channels;
+  std::vector<T> bottom_up(row * height), top_down(row * height);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(x0, 0, width, height, format, type, bottom_up.data());
+  for (int y = 0; y < height; ++y)
+    std::copy_n(bottom_up.begin() + static_cast<long>((height - 1 - y) * row), row, top_down.begin() + static_cast<long>(y * row));
+  return top_down;
+}
+
 DepthImage Viewer::read_depth() {
   draw_scene();  // the depth of what is shown now
   DepthImage d;
   d.width = camera_.width();
   d.height = camera_.height();
-  std::vector<float> rows(static_cast<size_t>(d.width) * d.height);
-  glReadPixels(kPanelWidth, 0, d.width, d.height, GL_DEPTH_COMPONENT, GL_FLOAT, rows.data());
-  d.depth.resize(rows.size());
-  for (int y = 0; y < d.height; ++y)  // OpenGL's rows start at the bottom
-    std::copy_n(rows.begin() + static_cast<long>(d.height - 1 - y) * d.width, d.width,
-                d.depth.begin() + static_cast<long>(y) * d.width);
+  d.depth = read_pixels<float>(kPanelWidth, d.width, d.height, GL_DEPTH_COMPONENT, GL_FLOAT, 1);
   return d;
+}
+
+void Viewer::write_pixels_png(const std::string& path, int x0, int width, int height) {
+  Image image(width, height);
+  image.rgb = read_pixels<std::uint8_t>(x0, width, height, GL_RGB, GL_UNSIGNED_BYTE, 3);
+  write_png(image, path);
 }
 
 void Viewer::write_screenshot(const std::string& path) {
   check_output(path, ".png");
   draw_scene();
-  glFinish();
-  Image image(camera_.width(), camera_.height());
-  std::vector<std::uint8_t> rows(image.rgb.size());
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadPixels(kPanelWidth, 0, image.width, image.height, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
-  for (int y = 0; y < image.height; ++y)
-    std::copy_n(rows.begin() + 3L * (image.height - 1 - y) * image.width, 3L * image.width, image.pixel(0, y));
-  write_png(image, path);
+  write_pixels_png(path, kPanelWidth, camera_.width(), camera_.height());
 }
 
 void Viewer::check_output(const std::string& path, const std::string& kind) const {
@@ -684,12 +695,7 @@ void Viewer::write_window_screenshot(const std::string& path) {
   check_output(path, ".png");
   int w = 0, h = 0;
   glfwGetFramebufferSize(window_, &w, &h);
-  Image image(w, h);
-  std::vector<std::uint8_t> rows(image.rgb.size());
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
-  for (int y = 0; y < h; ++y) std::copy_n(rows.begin() + 3L * (h - 1 - y) * w, 3L * w, image.pixel(0, y));
-  write_png(image, path);
+  write_pixels_png(path, 0, w, h);
 }
 
 void Viewer::draw_overlay() {
@@ -700,7 +706,7 @@ void Viewer::draw_overlay() {
     const Gizmo g = drag_part_ != GizmoPart::None ? drag_gizmo_ : gizmo();
     const ImVec2 c = at(camera_.project(g.center));
     const ImU32 colors[3] = {IM_COL32(220, 40, 40, 255), IM_COL32(40, 170, 40, 255), IM_COL32(40, 80, 230, 255)};
-    const GizmoMode mode = tool_ == Tool::Rotate ? GizmoMode::Rotate : GizmoMode::Translate;
+    const GizmoMode mode = gizmo_mode();
     const GizmoPart hover = drag_part_ != GizmoPart::None ? drag_part_ : g.pick(camera_, mode, cursor_);
     for (int a = 0; a < 3; ++a) {
       const ImVec2 tip = at(camera_.project(g.arrow_tip(camera_, a)));

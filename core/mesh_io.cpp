@@ -118,11 +118,26 @@ Vec3 parse_point(std::string_view& line, const LineReader& reader) {
   return p;
 }
 
-// The next token of a record: records that a writer wrapped continue on the following lines.
-std::string_view record_token(LineReader& reader, std::string_view& line) {
+// The next token of a record: records that a writer wrapped continue on the following lines (`wrapped`
+// is then set).
+std::string_view record_token(LineReader& reader, std::string_view& line, bool& wrapped) {
   std::string_view tok = next_token(line);
-  while (tok.empty() && reader.next(line)) tok = next_token(line);
+  while (tok.empty() && reader.next(line)) {
+    tok = next_token(line);
+    wrapped = true;
+  }
   return tok;
+}
+
+// A wrapped record must end where its last line ends: numbers left over there mean that the record's
+// first line lacked one (a vertex line "1 0" would otherwise take its z from the next vertex and shift
+// every record after it).
+void check_wrapped_record_end(const LineReader& reader, std::string_view line, bool wrapped, const char* kind,
+                              long index, int first_line) {
+  if (wrapped && !next_token(line).empty())
+    reader.fail(std::string(kind) + " " + std::to_string(index) + " starts on line " + std::to_string(first_line) + " with too few numbers and runs into this "
+                "line, which holds more than the rest of it: is a number missing on line " +
+                std::to_string(first_line) + "?");
 }
 
 FileContents read_off(std::string_view text, const std::string& path, const std::string& who) {
@@ -163,8 +178,12 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
       reader.fail("file ends after " + std::to_string(i) + " of " + std::to_string(nv) + " vertices" + why);
     }
     Vec3 p;
-    for (int k = 0; k < 3; ++k) p[k] = parse_number<double>(record_token(reader, line), reader, "a coordinate");
+    const int first_line = reader.number();
+    bool wrapped = false;
+    for (int k = 0; k < 3; ++k)
+      p[k] = parse_number<double>(record_token(reader, line, wrapped), reader, "a coordinate");
     if (!p.allFinite()) reader.fail("vertex has a non-finite coordinate (NaN or inf)");
+    check_wrapped_record_end(reader, line, wrapped, "vertex", i, first_line);
     if (extra_line == 0 && !next_token(line).empty()) extra_line = reader.number();
     soup.points.push_back(p);
   }
@@ -174,7 +193,11 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
     if (n < 3) reader.fail("face " + std::to_string(f) + " has " + std::to_string(n) + " corners (at least 3 needed)");
     if (static_cast<unsigned long>(n) > reader.bytes_left() + line.size())
       reader.fail("face " + std::to_string(f) + " has " + std::to_string(n) + " corners, more than the file holds");
-    for (long k = 0; k < n; ++k) soup.corners.push_back(parse_number<int>(record_token(reader, line), reader, "a vertex index"));
+    const int first_line = reader.number();
+    bool wrapped = false;
+    for (long k = 0; k < n; ++k)
+      soup.corners.push_back(parse_number<int>(record_token(reader, line, wrapped), reader, "a vertex index"));
+    check_wrapped_record_end(reader, line, wrapped, "face", f, first_line);
     soup.offsets.push_back(static_cast<int>(soup.corners.size()));
     soup.lines.push_back(reader.number());
   }

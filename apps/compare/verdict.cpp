@@ -178,7 +178,8 @@ std::string edit_charts_svg(const std::vector<MethodResult>& results, const std:
       {"frame time [ms], log", true, [](const MethodResult& r) { return r.frame_ms > 0 ? r.frame_ms : -1; }},
   };
   const int label_w = 150, panel_w = 170, row_h = 17, top = 34;
-  const int width = label_w + 4 * panel_w, height = top + row_h * static_cast<int>(ids.size()) + 8;
+  // 20 pixels past the last panel: its value labels (e.g. "2.04e+03" at a full bar) stay inside the picture.
+  const int width = label_w + 4 * panel_w + 20, height = top + row_h * static_cast<int>(ids.size()) + 8;
   std::ostringstream s;
   s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
     << "\" font-family=\"sans-serif\" font-size=\"11\">\n";
@@ -190,7 +191,7 @@ std::string edit_charts_svg(const std::vector<MethodResult>& results, const std:
   }
   for (int p = 0; p < 4; ++p) {
     const Panel& panel = panels[p];
-    const int x0 = label_w + p * panel_w + 4, bar_w = panel_w - 50;
+    const int x0 = label_w + p * panel_w + 4, bar_w = panel_w - 56;
     double hi = 0, lo = INFINITY;
     for (size_t i : ids)
       if (results[i].ok && panel.value(results[i]) >= 0)
@@ -247,7 +248,13 @@ std::string edit_charts_svg(const std::vector<MethodResult>& results, const std:
       if (!r.ok || r.frame_ms <= 0 || r.rigidity.count == 0) continue;
       const double x = px(r.frame_ms), y = py(r.rigidity.mean);
       s << "<circle cx=\"" << x << "\" cy=\"" << y << "\" r=\"4\" fill=\"" << colour(assessments[i].verdict)
-        << "\" stroke=\"#333\"/><text x=\"" << x + 6 << "\" y=\"" << y + 4 << "\">" << html_escape(r.method) << "</text>\n";
+        << "\" stroke=\"#333\"/>";
+      // The name right of its point, or left of it near the right edge (so it is not cut off).
+      if (x > W - 110)
+        s << "<text x=\"" << x - 6 << "\" y=\"" << y + 4 << "\" text-anchor=\"end\">";
+      else
+        s << "<text x=\"" << x + 6 << "\" y=\"" << y + 4 << "\">";
+      s << html_escape(r.method) << "</text>\n";
     }
     s << "</svg>\n";
   }

@@ -24,7 +24,7 @@ struct VerdictThresholds {
 struct Assessment {
   Verdict verdict = Verdict::Failed;
   std::string reason;  //!< in words, with the figures, e.g. "rigidity 5.1× the best (the shape shears)"
-  bool best = false;   //!< the edit's best result: the most rigid without broken triangles, then least distortion
+  bool best = false;   //!< the edit's best result: of the best verdict present, the most rigid, then least distortion
 };
 
 //! One assessment per result (same order). Failed: the run threw (the reason is its message). Broken:

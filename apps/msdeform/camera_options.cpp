@@ -54,10 +54,19 @@ void CameraOptions::apply(const Positions& P, const Region& region, RenderOption
     Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
     for (int v = 0; v < region.num_vertices(); ++v)
       if (region.handle_of(v) >= 0) lo = lo.cwiseMin(P.row(v).transpose()), hi = hi.cwiseMax(P.row(v).transpose());
-    o.framing = Framing::BoundingSphere;
-    o.sphere_center = (lo + hi) / 2;
-    // the handles and some of what surrounds them; never a zero sphere (one handle vertex)
-    o.sphere_radius = std::max(0.75 * (hi - lo).norm(), 0.05 * bounding_box_diagonal(P));
+    const Vec3 centre = (lo + hi) / 2;
+    double enclosing = 0;  // the handles' sphere about centre, and the shape's about its box centre
+    for (int v = 0; v < region.num_vertices(); ++v)
+      if (region.handle_of(v) >= 0) enclosing = std::max(enclosing, (P.row(v).transpose() - centre).norm());
+    const Vec3 shape_centre = (P.colwise().minCoeff() + P.colwise().maxCoeff()).transpose() / 2;
+    const double shape = (P.rowwise() - shape_centre.transpose()).rowwise().norm().maxCoeff();
+    // The handles and a quarter of their size around them; never a zero sphere (one handle vertex).
+    const double radius = std::max(1.25 * enclosing, 0.05 * bounding_box_diagonal(P));
+    if (radius < 0.6 * shape) {  // else the handles span most of the shape: frame all of it, tightly
+      o.framing = Framing::BoundingSphere;
+      o.sphere_center = centre;
+      o.sphere_radius = radius;
+    }
   }
 }
 

@@ -218,7 +218,8 @@ std::string verdicts_html(const std::vector<MethodResult>& results, const std::v
        "triangles folded over a multi-scale base), <span class=\"not-judged\">not judged</span> (no rigidity or "
        "detail measure, e.g. a point cloud), <span class=\"failed\">failed</span> (with its message); a method "
        "that warned (e.g. did not converge) is at most fair, and says why. "
-       "★ marks the best of each edit: the most rigid without broken triangles, then the least detail change.</p>\n"
+       "★ marks the best of each edit: of the results with the best verdict there, the most rigid, then the "
+       "least detail change (so a good result outranks a more rigid fair one).</p>\n"
        "<table class=\"verdicts\"><tr><th></th>";
   for (const auto& sc : scenes) h << "<th>" << html_escape(sc.name) << "</th>";
   h << "</tr>\n";
@@ -399,6 +400,7 @@ void add_compare_command(CLI::App& app) {
       if (!a->quiet) std::fprintf(stderr, "building scene %s (%s vertices)\n", s.c_str(), a->resolution.c_str());
       cases.push_back(scene_case(s, resolution));
     }
+    const size_t mesh_case = cases.size();  // the --mesh edit's index in cases, when given
     if (!a->mesh.mesh.empty()) cases.push_back(a->mesh.load());
     if (!a->survey.empty())
       for (const char* name : {"plane", "cylinder", "bar", "cactus"}) {
@@ -429,6 +431,9 @@ void add_compare_command(CLI::App& app) {
         std::fprintf(stderr, "%s: %zu vertices, %zu methods\n", c.name.c_str(), size_t(c.P.rows()), options.methods.size());
       options.settings = settings[i];
       std::vector<MethodResult> results = compare_methods(c, options);
+      for (const MethodResult& r : results)  // on the page too; printed even with --quiet, as deform does
+        if (r.ok && !r.warning.empty())
+          std::fprintf(stderr, "warning: %s / %s: %s\n", r.scene.c_str(), r.method.c_str(), r.warning.c_str());
       const Positions& rest = c.P;
       const Faces& F = c.F;
       RenderOptions view;
@@ -505,6 +510,7 @@ void add_compare_command(CLI::App& app) {
     int failed = 0;
     for (const auto& r : all) failed += !r.ok;
     std::printf("%s", verdict_summary(all, assessments).c_str());  // the whole table is in metrics.md
+    if (!a->mesh.mesh.empty()) a->mesh.write_built(cases[mesh_case].region, cases[mesh_case].transforms);
     std::printf("\nwrote %s/index.html (%zu results, %d failed) in %.1f s\n", a->output.c_str(), all.size(), failed, seconds);
     if (failed > 0)  // the pages are written, but the exit status says not everything ran
       throw Error("compare: " + std::to_string(failed) + " of " + std::to_string(all.size()) +

@@ -60,6 +60,7 @@ void add_decompose_command(CLI::App& app) {
       save.scalar_name = "detail";
     }
     save_mesh(d.base, d.base_faces, *output, save);
+    edit->write_built(c.region, c.transforms);
     std::printf("decomposed %s: %ld vertices, %.1f ms\n", c.name.c_str(), long(S.rows()), ms);
     switch (report.kind) {
       case DecompositionKind::Fairing:

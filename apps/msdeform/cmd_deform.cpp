@@ -66,7 +66,9 @@ void add_deform_command(CLI::App& app) {
       if (same_file(*controls_output, *output)) throw InvalidInput("--controls-output and -o name the same file");
     }
     if (!render_output->empty()) check_picture_output(*render_output, "--render");
-    const EditCase c = welding ? weld_case(edit->load(), *weld) : edit->load();
+    EditCase c = edit->load();
+    const Region file_region = c.region;  // on the file's vertices, for --write-sel (welding renumbers them)
+    if (welding) c = weld_case(std::move(c), *weld);
     if (c.weld)
       std::printf("welded %d vertices into others (within %g); %d faces lost a corner and were dropped\n",
                   c.weld->merged, *weld, c.weld->faces_dropped);
@@ -117,6 +119,7 @@ void add_deform_command(CLI::App& app) {
       save_mesh(space->control_points() + space->coefficients(), space->control_faces(), *controls_output);
       std::printf("  wrote the deformed control points (%d) to %s\n", space->num_coefficients(), controls_output->c_str());
     }
+    edit->write_built(file_region, c.transforms);
     std::printf("%s on %s: %ld vertices (%zu free, %d handle(s))\n", deformer->name().c_str(), c.name.c_str(),
                 long(rest.rows()), c.region.free_vertices().size(), c.region.num_handles());
     std::printf("  prepare %.1f ms, frame %.2f ms, handle error %.3g\n", prepare_ms, frame_ms, handle_error(rest, out, c.region, c.transforms));

@@ -88,12 +88,16 @@ void add_render_command(CLI::App& app) {
     } else if (mode != "none") {  // a PLY vertex property: NAME, or property:NAME for one named like a mode
       const std::string name = mode.rfind("property:", 0) == 0 ? mode.substr(9) : mode;
       if (c.path.empty()) throw InvalidInput("--color " + mode + ": a built-in scene has no vertex properties");
+      if (file_extension(c.path) != ".ply")
+        throw InvalidInput("--color " + mode + ": not a colour mode (auto, region, detail, selfint, rigidity, none), "
+                           "and " + c.path + " is not a PLY file, the only kind with named vertex properties");
       heights = load_vertex_property(c.path, name);
       o.vertex_scalar = &heights;
       o.scalar_label = name;
       std::printf("%s: values in [%.4g, %.4g]\n", name.c_str(), heights.minCoeff(), heights.maxCoeff());
     }
     render_png(c.P, c.F, *output, o);
+    edit->write_built(c.region, c.transforms);
     std::printf("wrote %s (%dx%d, up %+.0f %+.0f %+.0f)\n", output->c_str(), o.width, o.height, o.up.x(), o.up.y(),
                 o.up.z());
   });

@@ -74,6 +74,7 @@ void add_view_command(CLI::App& app) {
     o.inputs = {edit->mesh, edit->sel, edit->def, *script};
     for (const std::string& f : edit->region.input_files()) o.inputs.push_back(f);
     if (const int status = view::run_viewer(o); status != 0) std::exit(status);
+    edit->write_built(o.edit.region, o.edit.transforms);  // the region and transforms given, not those painted
 #else
     throw UsageError("this msdeform was built without the viewer: install libglfw3-dev and libimgui-dev "
                      "(scripts/setup.sh does) and build again");

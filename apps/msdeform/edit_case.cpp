@@ -96,15 +96,16 @@ EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {
       c.transforms = region.build_transforms(c.P, c.region);
     }
   }
-  if (!region.write_sel.empty()) {
-    if (c.region.num_vertices() == 0) throw InvalidInput("--write-sel: there is no region to write");
-    write_sel(c.region, region.write_sel);
-  }
-  if (!region.write_def.empty()) {
-    if (c.transforms.empty()) throw InvalidInput("--write-def: there are no transforms to write");
-    write_def(c.transforms, region.write_def);
-  }
+  if (!region.write_sel.empty() && c.region.num_vertices() == 0)
+    throw InvalidInput("--write-sel: there is no region to write");
+  if (!region.write_def.empty() && c.transforms.empty())
+    throw InvalidInput("--write-def: there are no transforms to write");
   return c;
+}
+
+void EditCaseOptions::write_built(const Region& built_region, const std::vector<Mat4>& transforms) const {
+  if (!region.write_sel.empty()) write_sel(built_region, region.write_sel);
+  if (!region.write_def.empty()) write_def(transforms, region.write_def);
 }
 
 }  // namespace msd::cli

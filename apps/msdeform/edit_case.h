@@ -25,11 +25,15 @@ struct EditCaseOptions {
   // and the path.
   void check_output(const std::string& output, const char* option,
                     const std::vector<std::string>& other_inputs = {}) const;
-  // Loads the files or builds the scene, builds the region and transforms given on the command line, and
-  // writes them when --write-sel / --write-def ask. Throws InvalidInput naming the file, option or
-  // mismatch. Without need_transforms, --def may be omitted (transforms stay empty); without need_region,
-  // --sel too (the region stays empty).
+  // Loads the files or builds the scene, and builds the region and transforms given on the command line.
+  // Throws InvalidInput naming the file, option or mismatch, also when --write-sel / --write-def have
+  // nothing to write. Without need_transforms, --def may be omitted (transforms stay empty); without
+  // need_region, --sel too (the region stays empty).
   EditCase load(bool need_transforms = true, bool need_region = true) const;
+  // Writes the region and transforms (as load() built them, on the file's vertices) where --write-sel /
+  // --write-def ask. Commands call it once their work has succeeded, so a failed run leaves those files
+  // as they were.
+  void write_built(const Region& region, const std::vector<Mat4>& transforms) const;
 };
 
 }  // namespace msd::cli

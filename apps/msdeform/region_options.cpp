@@ -125,7 +125,18 @@ void RegionOptions::add_to(CLI::App& cmd) {
   auto* g = cmd.add_option_group("region", "Regions and transforms without files (instead of --sel / --def)");
   group_ = g;
   auto add = [&](const char* name, std::vector<std::string>& values, const char* type, const char* help) {
-    return g->add_option(name, values, help)->type_name(type)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    // One value per occurrence. CLI11 takes the next word even when it is an option ("--handle --translate
+    // 0,0,1" would select by "--translate"): such a value is a missing one.
+    const CLI::Validator not_an_option(
+        [name](std::string& value) {
+          return value.rfind("--", 0) == 0 ? std::string(name) + " has no value before " + value : std::string();
+        },
+        "");
+    return g->add_option(name, values, help)
+        ->type_name(type)
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+        ->check(not_an_option);
   };
   fixed_ = add("--fixed", fixed_values_, "SPEC",
                "Fixed vertices: box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX | sphere:X,Y,Z,R | halfspace:NX,NY,NZ,D (n.p < d) | "
@@ -234,6 +245,10 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
     } else if (s.option == rotate_) {
       const auto v = numbers(option, s.value, {4}, "AX,AY,AZ,DEGREES");
       if (vec(v).squaredNorm() == 0) throw InvalidInput(option + ": the axis is zero");
+      // Beyond this, degrees lose the precision of a turn (1e80 would be any angle at all).
+      if (std::abs(v[3]) > 3.6e6)
+        throw InvalidInput(option + ": " + std::to_string(v[3]) + " degrees is out of range (at most 10 000 turns, "
+                           "|DEG| <= 3600000)");
       M.topLeftCorner<3, 3>() = Eigen::AngleAxisd(v[3] * kPi / 180, vec(v).normalized()).toRotationMatrix();
     } else {
       const auto v = numbers(option, s.value, {1, 3}, "S or SX,SY,SZ");

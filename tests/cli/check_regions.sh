@@ -101,11 +101,25 @@ done
 if [ -f "$cgal/armadillo.off" ]; then
   "$msdeform" render "$cgal/armadillo.off" -o armadillo.png --size 160 120 >out.txt 2>&1 || fail "render armadillo"
   grep -q "up +0 +1 +0" out.txt || { cat out.txt; fail "the armadillo is y-up"; }
+  # --focus handle never draws the shape smaller than without it: both hands span most of the armadillo,
+  # so it frames all of it (it zoomed out before); one hand alone is framed closer than the whole shape.
+  hands=(--handle sphere:63.5,71.7,-32.6,15 --handle sphere:-63.5,60.8,-21.7,15 --size 160 120)
+  "$msdeform" render "$cgal/armadillo.off" "${hands[@]}" -o hands.png >/dev/null 2>&1 &&
+    "$msdeform" render "$cgal/armadillo.off" "${hands[@]}" --focus handle -o hands-focus.png >/dev/null 2>&1 ||
+    fail "render --focus handle on the armadillo"
+  cmp -s hands.png hands-focus.png || fail "--focus handle on handles spanning the shape changed the framing"
+  hand=(--handle sphere:63.5,71.7,-32.6,15 --size 160 120)
+  "$msdeform" render "$cgal/armadillo.off" "${hand[@]}" -o hand.png >/dev/null 2>&1 &&
+    "$msdeform" render "$cgal/armadillo.off" "${hand[@]}" --focus handle -o hand-focus.png >/dev/null 2>&1 ||
+    fail "render --focus handle on one hand"
+  cmp -s hand.png hand-focus.png && fail "--focus handle on one hand did not move the camera"
 fi
 expect_error 1 "--up w: expected auto, x, y, z" "$msdeform" render lift.off --up w -o x.png
 expect_error 1 "--view 1: expected auto or AZ,EL" "$msdeform" render lift.off --view 1 -o x.png
 expect_error 1 "--focus handle: the region has no handle" "$msdeform" render lift.off --focus handle -o x.png
 expect_error 1 "needs a region" "$msdeform" render lift.off --color region -o x.png
+expect_error 1 "--color bogus: not a colour mode (auto, region, detail, selfint, rigidity, none)" \
+  "$msdeform" render lift.off --color bogus -o x.png
 expect_error 1 "the picture is a .png" "$msdeform" render lift.off -o x.jpg
 
 # Progress on stderr while deform and compare work; none with --quiet.
@@ -129,6 +143,9 @@ expect_error 1 "selects no vertex" "$msdeform" deform lift.off --handle sphere:9
 expect_error 1 "the vertex id must be an integer in [0," \
   "$msdeform" deform lift.off --handle vertex:99999999,1 --translate 0,0,1 -o x.off
 expect_error 1 "unknown selection 'cube'" "$msdeform" deform lift.off --handle cube:1 --translate 0,0,1 -o x.off
+expect_error 1 "degrees is out of range" "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,1,0,1e80 -o x.off
+expect_error 2 "--handle has no value before --translate" \
+  "$msdeform" deform lift.off --fixed vertex:5,1 --handle --translate 0,0.1,0 -o x.off
 expect_error 1 "--rotate 0,0,0,30: the axis is zero" "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,0,0,30 -o x.off
 expect_error 1 "'nan' is not a finite number" "$msdeform" deform lift.off --handle vertex:0,1 --translate nan,0,0 -o x.off
 expect_error 1 "not both" "$msdeform" deform lift.off --sel lift.sel --handle vertex:0,1 --translate 0,0,1 -o x.off
@@ -152,5 +169,16 @@ expect_error 1 "is one of the inputs" \
   "$msdeform" deform lift.off --handle file:mine.sel --translate 0,0,1 --write-sel mine.sel -o x.off
 cmp -s mine.sel lift.sel || fail "a file: input was replaced"
 expect_error 1 "is not an integer" "$msdeform" deform lift.off --handle file:lift.sel,abc --translate 0,0,1 -o x.off
+# --write-sel / --write-def are written once the command has succeeded: a run refused after the region is
+# built (here: --controls-output with a method without control points) leaves the files as they were.
+echo "mine" >keep.sel
+echo "mine" >keep.def
+expect_error 1 "--controls-output applies to methods with control points" \
+  "$msdeform" deform lift.off --handle vertex:0,1 --translate 0,0,1 --method shell --controls-output c.off \
+  --write-sel keep.sel --write-def keep.def -o x.off
+[ "$(cat keep.sel keep.def)" = "$(printf 'mine\nmine')" ] || fail "a failed run replaced --write-sel / --write-def"
+expect_error 1 "a built-in scene has no vertex properties" \
+  "$msdeform" render --scene lift --color property:detail --write-sel keep.sel -o x.png
+[ "$(cat keep.sel)" = "mine" ] || fail "a failed render replaced --write-sel"
 [ -e x.off ] && fail "a refused run wrote its output"
 echo "check_regions: all passed"

@@ -509,6 +509,14 @@ TEST_CASE("glued OFF headers, wrapped records, CR line ends and byte-order marks
   const std::string vertices = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n", faces = "3 0 1 2\n3 0 2 3\n";
   check_square(load_soup(write("glued.off", "OFF4 2 0\n" + vertices + faces)));  // ModelNet's header
   check_square(load_soup(write("wrapped.off", "OFF\n4 2 0\n0 0\n0\n1 0 0\n1 1\n0\n0 1 0\n3 0 1\n2\n3\n0 2 3\n")));
+  // A line missing a number is not a wrapped record: the next record's numbers are left over. This tet
+  // read with vertex 3 taken from the first face line, shifted faces, and exit 0.
+  CHECK_THROWS_WITH(load_soup(write("short-vertex.off", "OFF\n4 4 0\n0 0 0\n1 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n"
+                                                        "3 0 3 2\n3 1 2 3\n3 1 2 3\n")),
+                    Contains("line 5: vertex 1 starts on line 4 with too few numbers") &&
+                        Contains("is a number missing on line 4?"));
+  CHECK_THROWS_WITH(load_soup(write("short-face.off", "OFF\n4 2 0\n" + vertices + "3 0 1\n3 0 2 3\n# (long enough for the counts)\n")),
+                    Contains("line 8: face 0 starts on line 7"));
   std::string cr = "OFF\n4 2 0\n" + vertices + faces;
   std::replace(cr.begin(), cr.end(), '\n', '\r');
   check_square(load_soup(write("cr.off", cr)));

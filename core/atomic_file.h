@@ -17,6 +17,10 @@ void write_file_atomically(const std::string& path, std::string_view content);
 //! naming who (e.g. "-o") and the path.
 void check_writable(const std::string& path, const char* who);
 
+//! Whether two paths name one file: the same existing file (links followed), or, when either does not
+//! exist yet, the same spelling once made absolute. Used so that no output replaces an input.
+bool same_file(const std::string& a, const std::string& b);
+
 //! A file's bytes, mapped read-only: pages are read from disk as a reader touches them, so a reader that
 //! stops at a bad first line of a 1 GB file costs that line, not the file. Pipes (e.g. `<(command)`) are
 //! read whole, up to 1 GiB. \throw InvalidInput naming the path if it does not exist, is a folder or a

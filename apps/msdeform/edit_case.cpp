@@ -1,7 +1,6 @@
 #include "apps/msdeform/edit_case.h"
 
 #include <cstdio>
-#include <filesystem>
 #include <tuple>
 
 #include "msdeform/core/atomic_file.h"
@@ -27,13 +26,6 @@ void EditCaseOptions::add_to(CLI::App& cmd) {
       ->capture_default_str();
   cmd.add_flag("--force", force, "Let an output replace one of the input files (refused otherwise)");
   region.add_to(cmd);
-}
-
-bool same_file(const std::string& a, const std::string& b) {
-  namespace fs = std::filesystem;
-  std::error_code error;
-  if (fs::exists(a, error) && fs::exists(b, error)) return fs::equivalent(a, b, error);
-  return fs::weakly_canonical(a, error) == fs::weakly_canonical(b, error);
 }
 
 void EditCaseOptions::check_output(const std::string& output, const char* option,

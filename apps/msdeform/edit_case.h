@@ -7,12 +7,10 @@
 #include <CLI/CLI.hpp>
 
 #include "apps/msdeform/region_options.h"
+#include "msdeform/core/atomic_file.h"  // same_file, check_writable
 #include "msdeform/core/edit_case.h"
 
 namespace msd::cli {
-
-// Whether two paths name one file (an existing one, or the same spelling once made absolute).
-bool same_file(const std::string& a, const std::string& b);
 
 struct EditCaseOptions {
   std::string mesh, sel, def, scene, resolution = "10k";

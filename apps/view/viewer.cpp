@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <future>
 #include <map>
 #include <memory>
@@ -473,13 +472,13 @@ void Viewer::iterate_while_idle() {
 }
 
 void Viewer::recolor() {
-  const Positions plain = RenderOptions{}.base_color.transpose().replicate(edit_.P.rows(), 1);
+  auto plain = [&] { return Positions(RenderOptions{}.base_color.transpose().replicate(edit_.P.rows(), 1)); };
   Positions colors;
   metric_text_.clear();
   if (coloring_ == Coloring::Region) {
     colors = region_colors(edit_.region);
   } else if (coloring_ == Coloring::None) {
-    colors = plain;
+    colors = plain();
   } else {
     try {
       if (coloring_ == Coloring::Rigidity) {
@@ -500,7 +499,7 @@ void Viewer::recolor() {
       metric_text_ = text;
     } catch (const Error& e) {
       metric_text_ = e.what();
-      colors = plain;
+      colors = plain();
     }
   }
   upload_.resize(colors.size());
@@ -684,11 +683,9 @@ void Viewer::check_output(const std::string& path, const std::string& kind) cons
   check_writable(path, "view");
   std::vector<std::string> inputs = options_.inputs;
   inputs.push_back(edit_.path);
-  for (const std::string& input : inputs) {
-    std::error_code ec;
-    if (!input.empty() && std::filesystem::equivalent(path, input, ec))
+  for (const std::string& input : inputs)
+    if (!input.empty() && same_file(path, input))
       throw InvalidInput(path + " is one of the files the viewer read; it is not replaced (save under another name)");
-  }
 }
 
 void Viewer::write_window_screenshot(const std::string& path) {

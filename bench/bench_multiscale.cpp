@@ -2,7 +2,7 @@
 // 0.3, about what the automatic search picks on this plane — bench_decomposition times the search —,
 // shell factorisation and basis, detail encoding) and the full per-frame time (shell basis product,
 // fold count, base normals, reconstruction), for the lift and bend120 scenes.
-// Usage: bench_multiscale [resolution ...]   (default: 100k 1M)
+// Usage: bench_multiscale [--breakdown] [resolution ...]   (default: 100k 1M)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -11,7 +11,12 @@
 
 #include "bench/bench_common.h"
 #include "msdeform/core/memory.h"
+#include "msdeform/core/checks.h"
 #include "msdeform/core/scenes.h"
+#include "msdeform/deformation/shell.h"
+#include "msdeform/detail/fold_check.h"
+#include "msdeform/detail/encodings.h"
+#include "msdeform/reconstruction/decompose.h"
 #include "msdeform/reconstruction/multiscale.h"
 
 using namespace msd::bench;
@@ -29,10 +34,44 @@ void run(msd::Deformer& deformer, const msd::Scene& scene, const char* label) {
               frames[frames.size() / 2], frames.front());
   std::fflush(stdout);
 }
+
+// A multi-scale frame's stages one by one (what MultiscaleDeformer::deform runs, on the same
+// decomposition): the shell's basis product B', the encoding's reconstruction S' = B' ⊕ D (base normals or
+// frames, then interpolation), the fold count and the finite check of S'. Medians of 30 frames.
+void breakdown(const msd::Scene& scene) {
+  msd::DecompositionOptions options;
+  options.low_pass.detail_scale = 0.3;
+  const msd::Decomposition d = msd::decompose(scene.P, scene.F, scene.region, options);
+  msd::ShellDeformer shell;
+  shell.prepare(d.edit, d.edit_faces, d.edit_region);
+  msd::FoldCheck folds;
+  folds.prepare(scene.P, scene.F, d.base, d.base_faces);
+  msd::Positions B(d.base.rows(), 3), S(scene.P.rows(), 3);
+  auto median = [](std::vector<double> ms) { return ms[ms.size() / 2]; };
+  const double t_shell = median(time_frames(30, [&](int) { shell.deform(scene.transforms, B); }));
+  for (const char* name : {"normal", "vectors"}) {
+    msd::EncodingOptions eo;
+    eo.kind = msd::encoding_kind(name);
+    const auto encoding = msd::make_encoding(eo);
+    encoding->encode(scene.P, scene.F, d.base, d.base_faces);
+    const double t_encoding = median(time_frames(30, [&](int) { encoding->reconstruct(B, S); }));
+    int folded = 0;
+    const double t_folds = median(time_frames(30, [&](int) { folded = folds.count(S, B); }));
+    long bad = 0;
+    const double t_finite = median(time_frames(30, [&](int) { bad = msd::first_non_finite_row(S); }));
+    std::printf("%10ld %9s %9s breakdown [ms]: shell %.2f, reconstruction %.2f, fold count %.2f, finite check "
+                "%.2f (%d folded, first bad row %ld)\n",
+                long(scene.P.rows()), scene.name.c_str(), name, t_shell, t_encoding, t_folds, t_finite, folded, bad);
+    std::fflush(stdout);
+  }
+}
 }  // namespace
 
 int main(int argc, char** argv) {
   msd::retain_freed_memory();
+  // --breakdown: only the stages of the lift frame.
+  const bool only_breakdown = argc > 1 && std::string(argv[1]) == "--breakdown";
+  if (only_breakdown) --argc, ++argv;
   const std::vector<std::string> sizes = msd::bench::sizes(argc, argv, {"100k", "1M"});
   std::printf("%10s %9s %9s %11s %14s %14s\n", "vertices", "scene", "encoding", "prepare[s]", "frame med[ms]",
               "frame min[ms]");
@@ -41,6 +80,10 @@ int main(int argc, char** argv) {
       msd::SceneOptions options;
       options.resolution = msd::parse_resolution(size);
       const msd::Scene scene = msd::make_scene(name, options);
+      if (only_breakdown) {
+        if (std::string(name) == "lift") breakdown(scene);
+        continue;
+      }
       for (const char* encoding : {"normal", "vectors"}) {
         msd::MultiscaleOptions o;
         o.encoding.kind = msd::encoding_kind(encoding);
@@ -55,6 +98,7 @@ int main(int argc, char** argv) {
       o.encoding.kind = msd::EncodingKind::Vectors;
       msd::MultiscaleDeformer sub(o);
       run(sub, scene, "subdiv");
+      if (std::string(name) == "lift") breakdown(scene);
     }
   return 0;
 }

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <string>
 
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
+#include "msdeform/detail/phong.h"
 
 namespace msd {
 namespace {
@@ -32,7 +34,7 @@ VertexFrames::VertexFrames(const Faces& F, int num_vertices) {
   VertexFaces star = vertex_faces(F, num_vertices);
   face_offsets_ = std::move(star.offsets);
   incident_faces_ = std::move(star.faces);
-  face_normals_.resize(F.rows(), 3);
+  face_normals_.resize(4 * F.rows());
   // Every corner lists its two neighbours in winding order; faces are visited in index order.
   std::vector<int> offsets(num_vertices + 1, 0);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
@@ -65,21 +67,23 @@ std::vector<int> VertexFrames::edge_order(int v) const {
   return std::vector<int>(neighbours_.begin() + offsets_[v], neighbours_.begin() + offsets_[v + 1]);
 }
 
-void VertexFrames::compute(const Positions& P, Positions& N, Positions& T1, Positions& T2) const {
+template <class Visit>
+void VertexFrames::visit_frames(const Positions& P, Visit visit) const {
   const long nv = num_vertices();
-  if (P.rows() != nv)
-    throw UsageError("VertexFrames::compute: " + std::to_string(P.rows()) + " positions for " +
-                     std::to_string(nv) + " vertices");
-  if (N.rows() != nv) N.resize(nv, 3);
-  if (T1.rows() != nv) T1.resize(nv, 3);
-  if (T2.rows() != nv) T2.resize(nv, 3);
+  const phong::Columns X(P);
+  double* const face_normals = face_normals_.data();
+  // Per face: the normal of length 2 · area (area weighting), or zero for a zero-area face, and its length.
   parallel_for_chunks(F_.rows(), [&](long begin, long end) {
     for (long f = begin; f < end; ++f) {
-      const Vec3 p0 = P.row(F_(f, 0)), p1 = P.row(F_(f, 1)), p2 = P.row(F_(f, 2));
-      const Vec3 n = (p1 - p0).cross(p2 - p0);  // length 2 · area: area weighting
+      const Vec3 p0 = X.row(F_(f, 0)), p1 = X.row(F_(f, 1)), p2 = X.row(F_(f, 2));
+      const Vec3 n = (p1 - p0).cross(p2 - p0);
       const double longest2 =
           std::max({(p1 - p0).squaredNorm(), (p2 - p1).squaredNorm(), (p0 - p2).squaredNorm()});
-      face_normals_.row(f) = n.norm() > kMinAreaFraction * 2 * longest2 ? n : Vec3::Zero();
+      const double len = n.norm();
+      const bool area = len > kMinAreaFraction * 2 * longest2;
+      double* out = face_normals + 4 * f;
+      out[0] = area ? n.x() : 0.0, out[1] = area ? n.y() : 0.0, out[2] = area ? n.z() : 0.0;
+      out[3] = area ? len : 0.0;
     }
   });
   parallel_for_chunks(nv, [&](long begin, long end) {
@@ -87,28 +91,25 @@ void VertexFrames::compute(const Positions& P, Positions& N, Positions& T1, Posi
       Vec3 sum = Vec3::Zero();
       double weight = 0;
       for (int i = face_offsets_[v]; i < face_offsets_[v + 1]; ++i) {
-        const Vec3 fn = face_normals_.row(incident_faces_[i]);
-        sum += fn;
-        weight += fn.norm();
+        const double* fn = face_normals + 4 * incident_faces_[i];
+        sum += Vec3(fn[0], fn[1], fn[2]);
+        weight += fn[3];
       }
       const double len = sum.norm();
       if (!(len > kMinNormalFraction * weight) || !(len > 0)) {  // no normal: world frame
-        N.row(v) = Vec3::UnitZ();
-        T1.row(v) = Vec3::UnitX();
-        T2.row(v) = Vec3::UnitY();
+        visit(v, Vec3::UnitZ(), Vec3::UnitX(), Vec3::UnitY());
         continue;
       }
       const Vec3 n = sum / len;
-      N.row(v) = n;
-      const Vec3 p = P.row(v);
+      const Vec3 p = X.row(v);
       Vec3 t = Vec3::Zero();
       bool found = false;
       for (int i = offsets_[v]; i < offsets_[v + 1] && !found; ++i) {
-        const Vec3 e = Vec3(P.row(neighbours_[i])) - p;
+        const Vec3 e = X.row(neighbours_[i]) - p;
         t = e - e.dot(n) * n;
-        const double t_len = t.norm();
-        if (t_len > kMinTangentFraction * e.norm() && t_len > 0) {
-          t /= t_len;
+        const double t_len2 = t.squaredNorm();  // squared lengths compared: one square root less per vertex
+        if (t_len2 > kMinTangentFraction * kMinTangentFraction * e.squaredNorm() && t_len2 > 0) {
+          t /= std::sqrt(t_len2);
           found = true;
         }
       }
@@ -118,9 +119,23 @@ void VertexFrames::compute(const Positions& P, Positions& N, Positions& T1, Posi
         const Vec3 e = Vec3::Unit(axis);
         t = (e - e.dot(n) * n).normalized();
       }
-      T1.row(v) = t;
-      T2.row(v) = n.cross(t);
+      visit(v, n, t, n.cross(t));
     }
+  });
+}
+
+void VertexFrames::compute(const Positions& P, Positions& N, Positions& T1, Positions& T2) const {
+  const long nv = num_vertices();
+  if (P.rows() != nv)
+    throw UsageError("VertexFrames::compute: " + std::to_string(P.rows()) + " positions for " +
+                     std::to_string(nv) + " vertices");
+  if (N.rows() != nv) N.resize(nv, 3);
+  if (T1.rows() != nv) T1.resize(nv, 3);
+  if (T2.rows() != nv) T2.resize(nv, 3);
+  visit_frames(P, [&](long v, const Vec3& n, const Vec3& t1, const Vec3& t2) {
+    N.row(v) = n;
+    T1.row(v) = t1;
+    T2.row(v) = t2;
   });
 }
 
@@ -148,11 +163,12 @@ void DisplacementVectors::encode(const Positions& S, const Faces& Fs, const Posi
   if (options_.frame == DisplacementFrame::Global) {
     coefficients_ = H;
   } else {
-    frames_.compute(B, N_, T1_, T2_);
+    Positions N, T1, T2;
+    frames_.compute(B, N, T1, T2);
     coefficients_.resize(H.rows(), 3);
-    coefficients_.col(0) = (H.array() * N_.array()).rowwise().sum();  // (9.8): α = h · n
-    coefficients_.col(1) = (H.array() * T1_.array()).rowwise().sum();
-    coefficients_.col(2) = (H.array() * T2_.array()).rowwise().sum();
+    coefficients_.col(0) = (H.array() * N.array()).rowwise().sum();  // (9.8): α = h · n
+    coefficients_.col(1) = (H.array() * T1.array()).rowwise().sum();
+    coefficients_.col(2) = (H.array() * T2.array()).rowwise().sum();
   }
   encoded_ = true;
 }
@@ -164,24 +180,31 @@ void DisplacementVectors::reconstruct(const Positions& B_deformed, Positions& ou
     throw UsageError("DisplacementVectors::reconstruct: deformed base has " +
                      std::to_string(B_deformed.rows()) + " vertices, the encoded base had " +
                      std::to_string(nv));
-  const bool local = options_.frame == DisplacementFrame::Local;
-  if (local) frames_.compute(B_deformed, N_, T1_, T2_);
   if (out.rows() != nv) out.resize(nv, 3);
-  std::atomic<bool> finite{true};
-  parallel_for_chunks(nv, [&](long begin, long end) {
-    bool chunk_finite = true;
-    for (long v = begin; v < end; ++v) {
-      const Vec3 c = coefficients_.row(v);
-      Vec3 p = B_deformed.row(v);
-      if (local)
-        p += c[0] * Vec3(N_.row(v)) + c[1] * Vec3(T1_.row(v)) + c[2] * Vec3(T2_.row(v));  // (9.8) on B'
-      else
-        p += c;
-      out.row(v) = p;
-      chunk_finite = chunk_finite && p.allFinite();
-    }
-    if (!chunk_finite) finite = false;
-  });
+  const double* const c = coefficients_.data();  // column-major: α, β, γ (or the world vector)
+  double* const o = out.data();
+  std::atomic<bool> finite{true};  // x − x is 0 for a finite x, NaN otherwise
+  if (options_.frame == DisplacementFrame::Local) {
+    const phong::Columns b(B_deformed);
+    // The frames of B' straight into (9.8): no per-frame #V by 3 frame arrays written and read back.
+    // visit_frames runs its vertices in chunks on both cores; `finite` gathers their checks.
+    frames_.visit_frames(B_deformed, [&](long v, const Vec3& n, const Vec3& t1, const Vec3& t2) {
+      const Vec3 p = b.row(v) + (c[v] * n + c[nv + v] * t1 + c[2 * nv + v] * t2);
+      o[v] = p.x(), o[nv + v] = p.y(), o[2 * nv + v] = p.z();
+      if (!((p.x() - p.x()) + (p.y() - p.y()) + (p.z() - p.z()) == 0)) finite.store(false, std::memory_order_relaxed);
+    });
+  } else {
+    parallel_for_chunks(nv, [&](long begin, long end) {
+      double check = 0;
+      for (int d = 0; d < 3; ++d)
+        for (long v = begin; v < end; ++v) {
+          const double x = B_deformed.data()[d * nv + v] + c[d * nv + v];
+          o[d * nv + v] = x;
+          check += x - x;
+        }
+      if (!(check == 0)) finite = false;
+    });
+  }
   if (!finite) {
     check_finite(B_deformed, "DisplacementVectors::reconstruct", "the deformed base");
     throw InvalidInput("DisplacementVectors::reconstruct: non-finite result from a finite base (overflow?)");

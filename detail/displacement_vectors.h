@@ -39,10 +39,15 @@ class VertexFrames {
   int num_vertices() const { return static_cast<int>(offsets_.size()) - 1; }
 
  private:
+  friend class DisplacementVectors;  // reconstructs from each frame as it is computed
+  //! Calls visit(v, n, t1, t2) for every vertex, in parallel chunks (P has #V rows).
+  template <class Visit>
+  void visit_frames(const Positions& P, Visit visit) const;
+
   Faces F_;
   std::vector<int> face_offsets_{0}, incident_faces_;  // CSR: faces around each vertex
   std::vector<int> offsets_{0}, neighbours_;           // CSR: ordered, distinct neighbours of each vertex
-  mutable Positions face_normals_;                     // per-frame buffer, #F by 3, length 2 · area
+  mutable std::vector<double> face_normals_;  // per-frame buffer, 4 per face: the normal (length 2 · area), its length
 };
 
 //! Where the displacement vectors live.
@@ -86,7 +91,6 @@ class DisplacementVectors : public DetailEncoding {
   VertexFrames frames_;
   bool encoded_ = false;
   Eigen::MatrixX3d coefficients_;
-  Positions N_, T1_, T2_;  // per-frame buffers
 };
 
 }  // namespace msd

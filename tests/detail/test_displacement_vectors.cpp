@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "msdeform/core/errors.h"
@@ -210,5 +211,9 @@ TEST_CASE("displacement vectors: bad use and mismatched connectivity", "[detail]
   Positions nan_b = P;
   nan_b(6, 1) = std::nan("");
   CHECK_THROWS_WITH(dv.reconstruct(nan_b, out), Contains("vertex 6"));
+  DisplacementVectors global(DisplacementVectorOptions{DisplacementFrame::Global});
+  global.encode(S, F, P, F);
+  nan_b(6, 1) = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_WITH(global.reconstruct(nan_b, out), Contains("vertex 6"));
   CHECK_THROWS_AS(VertexFrames(F, 9).compute(Positions(P.topRows(3)), out, out, out), UsageError);
 }

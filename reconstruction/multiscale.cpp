@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/parallel.h"
 #include "msdeform/deformation/shell.h"
 
 namespace msd {
@@ -72,10 +73,15 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
     out = base_deformed_;  // no detail layer: S' = B'
   else
     encoding_->reconstruct(base_deformed_, out);  // S' = B' ⊕ D
-  for (const auto& [v, k] : placed_) {
-    const Vec3 p = rest_.row(v);
-    out.row(v) = k < 0 ? p : transform_point(transforms[k], p);
-  }
+  // Fixed and handle vertices exactly where the edit puts them (the details reproduce them only to the
+  // encoding's accuracy); a whole-body handle holds a large share of the vertices, so on both cores.
+  parallel_for_chunks(static_cast<long>(placed_.size()), [&](long begin, long end) {
+    for (long i = begin; i < end; ++i) {
+      const auto [v, k] = placed_[i];
+      const Vec3 p = rest_.row(v);
+      out.row(v) = k < 0 ? p : transform_point(transforms[k], p);
+    }
+  });
   FrameReport& r = frame_report_;
   const FrameReport& base = base_deformer_->frame_report();
   r.iterations = base.iterations;

@@ -1,7 +1,8 @@
 // The multi-scale edit (seed 9.3) on the bumpy plane: prepare (low-pass base at a given detail scale of
 // 0.3, about what the automatic search picks on this plane — bench_decomposition times the search —,
 // shell factorisation and basis, detail encoding) and the full per-frame time (shell basis product,
-// fold count, base normals, reconstruction), for the lift and bend120 scenes.
+// fold count, base normals, reconstruction), for the lift and bend120 scenes. --breakdown times only the
+// stages of the lift frame, one by one.
 // Usage: bench_multiscale [--breakdown] [resolution ...]   (default: 100k 1M)
 #include <algorithm>
 #include <chrono>
@@ -73,8 +74,9 @@ int main(int argc, char** argv) {
   const bool only_breakdown = argc > 1 && std::string(argv[1]) == "--breakdown";
   if (only_breakdown) --argc, ++argv;
   const std::vector<std::string> sizes = msd::bench::sizes(argc, argv, {"100k", "1M"});
-  std::printf("%10s %9s %9s %11s %14s %14s\n", "vertices", "scene", "encoding", "prepare[s]", "frame med[ms]",
-              "frame min[ms]");
+  if (!only_breakdown)
+    std::printf("%10s %9s %9s %11s %14s %14s\n", "vertices", "scene", "encoding", "prepare[s]", "frame med[ms]",
+                "frame min[ms]");
   for (const auto& size : sizes)
     for (const char* name : {"lift", "bend120"}) {
       msd::SceneOptions options;

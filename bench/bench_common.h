@@ -3,10 +3,28 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
 #include <string>
 #include <vector>
 
 namespace msd::bench {
+
+// A bad argument (an unknown size, a mesh too small for a scene) ends a benchmark with the exception's
+// message and exit status 2, not with an abort.
+inline const bool kExitWithMessage = [] {
+  std::set_terminate([] {
+    try {
+      if (const std::exception_ptr e = std::current_exception()) std::rethrow_exception(e);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+    } catch (...) {
+    }
+    std::_Exit(2);
+  });
+  return true;
+}();
 
 using Clock = std::chrono::steady_clock;
 

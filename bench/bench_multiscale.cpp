@@ -79,11 +79,12 @@ int main(int argc, char** argv) {
                 "frame min[ms]");
   for (const auto& size : sizes)
     for (const char* name : {"lift", "bend120"}) {
+      if (only_breakdown && std::string(name) != "lift") continue;
       msd::SceneOptions options;
       options.resolution = msd::parse_resolution(size);
       const msd::Scene scene = msd::make_scene(name, options);
       if (only_breakdown) {
-        if (std::string(name) == "lift") breakdown(scene);
+        breakdown(scene);
         continue;
       }
       for (const char* encoding : {"normal", "vectors"}) {

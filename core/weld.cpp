@@ -1,5 +1,6 @@
 #include "msdeform/core/weld.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -62,20 +63,19 @@ void join_close(const Positions& P, const std::vector<int>& ids, double eps, Dis
   }
 }
 
-std::vector<int> boundary_vertices(const Positions& P, const Faces& F) {
+std::uint64_t edge_key(int a, int b) {
+  return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+}
+
+// Edges of exactly one face, as (lower, higher) vertex pairs packed by edge_key.
+std::vector<std::uint64_t> boundary_edges(const Faces& F) {
   std::unordered_map<std::uint64_t, int> edge_faces;
   edge_faces.reserve(static_cast<size_t>(3 * F.rows()));
-  const auto key = [](int a, int b) {
-    return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
-  };
   for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) ++edge_faces[key(F(f, k), F(f, (k + 1) % 3))];
-  std::vector<char> on(static_cast<size_t>(P.rows()), 0);
+    for (int k = 0; k < 3; ++k) ++edge_faces[edge_key(F(f, k), F(f, (k + 1) % 3))];
+  std::vector<std::uint64_t> out;
   for (const auto& [e, n] : edge_faces)
-    if (n == 1) on[e >> 32] = on[e & 0xffffffffu] = 1;
-  std::vector<int> out;
-  for (int v = 0; v < static_cast<int>(on.size()); ++v)
-    if (on[v]) out.push_back(v);
+    if (n == 1) out.push_back(e);
   return out;
 }
 
@@ -83,14 +83,29 @@ std::vector<int> boundary_vertices(const Positions& P, const Faces& F) {
 
 int count_seam_vertices(const Positions& P, const Faces& F, double eps) {
   check(P, F, eps, "count_seam_vertices");
-  const std::vector<int> boundary = boundary_vertices(P, F);
+  const std::vector<std::uint64_t> edges = boundary_edges(F);
+  const auto first = [](std::uint64_t e) { return static_cast<int>(e >> 32); };
+  const auto second = [](std::uint64_t e) { return static_cast<int>(e & 0xffffffffu); };
+  std::vector<char> on(static_cast<size_t>(P.rows()), 0);
+  for (const std::uint64_t e : edges) on[first(e)] = on[second(e)] = 1;
+  std::vector<int> boundary;
+  for (int v = 0; v < static_cast<int>(on.size()); ++v)
+    if (on[v]) boundary.push_back(v);
   DisjointSets groups(static_cast<int>(P.rows()));
   join_close(P, boundary, eps, groups);
   std::vector<int> size(static_cast<size_t>(P.rows()), 0);
   for (int v : boundary) ++size[groups.find(v)];
-  int count = 0;
-  for (int v : boundary) count += size[groups.find(v)] > 1;
-  return count;
+  // A seam runs along boundary edges that lie on another boundary edge (both ends coincide). Boundary
+  // vertices that meet another only at a point (holes touching at a vertex) are no seam: welding them
+  // would make the vertex non-manifold.
+  std::unordered_map<std::uint64_t, int> coinciding;
+  for (const std::uint64_t e : edges) ++coinciding[edge_key(groups.find(first(e)), groups.find(second(e)))];
+  std::vector<char> seam(static_cast<size_t>(P.rows()), 0);
+  for (const std::uint64_t e : edges)
+    if (coinciding[edge_key(groups.find(first(e)), groups.find(second(e)))] > 1)
+      for (const int v : {first(e), second(e)})
+        if (size[groups.find(v)] > 1) seam[v] = 1;
+  return static_cast<int>(std::count(seam.begin(), seam.end(), 1));
 }
 
 Weld weld_vertices(const Positions& P, const Faces& F, double eps) {

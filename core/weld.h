@@ -9,8 +9,10 @@
 
 namespace msd {
 
-//! Boundary vertices (on an edge of exactly one face) that lie within eps (mesh units; 0: at the same
-//! coordinates) of another boundary vertex: the vertices of open seams. O(#V + #F) expected.
+//! The vertices of open seams: boundary vertices (on an edge of exactly one face) within eps (mesh units; 0:
+//! at the same coordinates) of another boundary vertex, on a boundary edge that lies on another boundary
+//! edge (both ends within eps). Boundary vertices that meet another only at a point (holes touching at a
+//! vertex) are not counted: welding them would make the vertex non-manifold. O(#V + #F) expected.
 //! \throw InvalidInput for a negative or non-finite eps, or a face index outside [0, #V).
 int count_seam_vertices(const Positions& P, const Faces& F, double eps = 0);
 

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "msdeform/core/adjacency.h"
@@ -23,6 +24,14 @@ constexpr double kDefectFraction = 1e-3;
 // Automatic scale: a base with less than this fraction of S's area has lost the shape (a tube smoothed
 // towards its axis), whatever its details look like.
 constexpr double kMinAreaRatio = 0.5;
+// A given detail scale above this many diameters of S is refused (see low_pass_base).
+constexpr double kMaxScaleOverDiameter = 1e6;
+
+std::string format_number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", x);
+  return text;
+}
 
 // (M + ℓ⁴ W M̃⁻¹ W) B = M S on the vertices off the mesh boundary, B = S on it; prepared once per mesh,
 // solve() refactors for each ℓ (same pattern). Coordinates are relative to the centroid of S.
@@ -41,6 +50,7 @@ class LowPassSystem {
       mass_[v] = std::max(mass_[v], floor);
       (boundary[v] ? known_ : unknown_).push_back(v);
     }
+    if (unknown_.empty()) return;  // every vertex on the boundary: B = S, no system to build
     const SparseMatrix bending = lap.W * inverse.asDiagonal() * lap.W;
     bending_uu_ = submatrix(bending, unknown_, unknown_);
     if (!known_.empty()) bending_uk_ = submatrix(bending, unknown_, known_);
@@ -52,6 +62,9 @@ class LowPassSystem {
     known_values_.resize(static_cast<Eigen::Index>(known_.size()), 3);
     for (size_t c = 0; c < known_.size(); ++c) known_values_.row(c) = centred_.row(known_[c]);
   }
+
+  //! Every vertex lies on the mesh boundary (a single triangle, a strip): nothing to smooth, B = S.
+  bool all_known() const { return unknown_.empty(); }
 
   Positions solve(double detail_scale) {
     const double l = detail_scale / (2 * kPi), l4 = l * l * l * l;
@@ -72,7 +85,9 @@ class LowPassSystem {
     for (size_t u = 0; u < unknown_.size(); ++u) rhs.row(u) = mass_[unknown_[u]] * centred_.row(unknown_[u]);
     if (!known_.empty()) rhs -= l4 * (bending_uk_ * known_values_);
     solver_.solve(rhs, X);
-    if (!X.allFinite()) throw SolverError(std::string(kWho) + ": the smoothed positions are not finite");
+    if (!X.allFinite())
+      throw SolverError(std::string(kWho) + ": the smoothed positions are not finite at the detail scale " +
+                        format_number(detail_scale) + " (degenerate faces, or a scale too large for this mesh?)");
     Positions B(centred_.rows(), 3);
     for (size_t u = 0; u < unknown_.size(); ++u) B.row(unknown_[u]) = X.row(u);
     for (size_t c = 0; c < known_.size(); ++c) B.row(known_[c]) = known_values_.row(c);
@@ -112,11 +127,21 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
   if (!(options.max_scale_fraction > 0) || !std::isfinite(options.max_scale_fraction))
     throw InvalidInput(std::string(kWho) + ": max_scale_fraction must be positive and finite");
 
+  // Far beyond the diameter the filter keeps only S's affine part, and (L/2π)⁴ overflows the system's
+  // entries long before L reaches the largest double.
+  if (options.detail_scale > kMaxScaleOverDiameter * diameter(S))
+    throw InvalidInput(std::string(kWho) + ": the detail scale " + format_number(options.detail_scale) +
+                       " is more than " + format_number(kMaxScaleOverDiameter) + " times the mesh's diameter " +
+                       format_number(diameter(S)) + " (mesh units); a detail scale is a feature length on the mesh");
   LowPassReport r;
   r.mean_edge_length = mean_edge_length(S, F);
   LowPassSystem system(S, F);
   Positions B;
-  if (options.detail_scale > 0) {
+  if (system.all_known()) {  // no detail layer: the base is S (decompose() says why)
+    r.automatic = options.detail_scale == 0;
+    B = S;
+    r.check = check_details(S, B, F);
+  } else if (options.detail_scale > 0) {
     r.detail_scale = options.detail_scale;
     B = system.solve(r.detail_scale);
     r.check = check_details(S, B, F);

@@ -52,14 +52,16 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
   // around 1e±150; say so rather than let a solver blame degenerate triangles. Sizes from 1e-70 to 1e70
   // keep areas squared inside a double.
   const double diagonal = P.rows() > 0 ? bounding_box_diagonal(P) : 0;
-  const double extent = std::max(diagonal, P.rows() > 0 ? P.cwiseAbs().maxCoeff() : 0.0);
+  const double largest = P.rows() > 0 ? P.cwiseAbs().maxCoeff() : 0.0;
+  const double extent = std::max(diagonal, largest);
   if (P.rows() > 0 && diagonal == 0)
     throw InvalidInput(name() + ": the input has no extent (all its " + std::to_string(P.rows()) +
                        " vertices are at one point)");
   if (!(extent < kMaxExtent) || (P.rows() > 0 && diagonal < kMinExtent))
     throw InvalidInput(name() + ": coordinates too " + (extent < kMaxExtent ? "small" : "large") +
-                       ": the bounding-box diagonal is " + format_number(diagonal) + " and the largest |coordinate| " +
-                       format_number(extent) + "; msdeform works with sizes from 1e-70 to 1e70 (squared areas must fit "
+                       ": the bounding-box diagonal is " +
+                       (std::isfinite(diagonal) ? format_number(diagonal) : std::string("beyond the largest double")) +
+                       " and the largest |coordinate| " + format_number(largest) + "; msdeform works with sizes from 1e-70 to 1e70 (squared areas must fit "
                        "a double): rescale the input");
   if (surface && F.rows() == 0)
     throw InvalidInput(name() + ": a surface method needs triangles, and the input has none");

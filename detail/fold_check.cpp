@@ -1,6 +1,9 @@
 #include "msdeform/detail/fold_check.h"
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -15,7 +18,8 @@ namespace {
 
 // n_a · n_b for triangle ta of A and tb of B, each n twice the area-weighted normal. Raw columns and
 // indices in locals: this runs every frame over all triangles (Eigen's row views of the column-major
-// arrays cost a third of it).
+// arrays cost a third of it). Of order size⁴: it overflows beyond sizes of about 1e77 and underflows below
+// 1e-77, where orientation() takes over.
 inline double dot_of_normals(const phong::Columns& A, const int* ta, const phong::Columns& B, const int* tb) {
   const int a0 = ta[0], a1 = ta[1], a2 = ta[2], b0 = tb[0], b1 = tb[1], b2 = tb[2];
   const double ax = A.x[a1] - A.x[a0], ay = A.y[a1] - A.y[a0], az = A.z[a1] - A.z[a0];
@@ -24,6 +28,28 @@ inline double dot_of_normals(const phong::Columns& A, const int* ta, const phong
   const double gx = B.x[b2] - B.x[b0], gy = B.y[b2] - B.y[b0], gz = B.z[b2] - B.z[b0];
   return (ay * cz - az * cy) * (ey * gz - ez * gy) + (az * cx - ax * cz) * (ez * gx - ex * gz) +
          (ax * cy - ay * cx) * (ex * gy - ey * gx);
+}
+
+// The normal of triangle t of X scaled to a largest component of 1, from edges scaled the same way (no
+// overflow or underflow at any finite size); zero for a triangle whose area is below kMinAreaFraction of
+// its squared longest edge, as cotan_laplacian treats it: its orientation is rounding noise.
+constexpr double kMinAreaFraction = 1e-14;
+Vec3 unit_scale_normal(const phong::Columns& X, const int* t) {
+  const Vec3 p0 = X.row(t[0]);
+  Vec3 e1 = X.row(t[1]) - p0, e2 = X.row(t[2]) - p0;
+  const double scale = std::max(e1.cwiseAbs().maxCoeff(), e2.cwiseAbs().maxCoeff());
+  if (!(scale > 0) || !std::isfinite(scale)) return Vec3::Zero();
+  e1 /= scale, e2 /= scale;
+  const Vec3 n = e1.cross(e2);
+  const double longest2 = std::max({e1.squaredNorm(), e2.squaredNorm(), (e2 - e1).squaredNorm()});
+  if (!(n.norm() > 2 * kMinAreaFraction * longest2)) return Vec3::Zero();
+  return n / n.cwiseAbs().maxCoeff();
+}
+
+// Sign of n_a · n_b (−1, 0 or 1), right at any finite size; 0 where either triangle is degenerate.
+int orientation(const phong::Columns& A, const int* ta, const phong::Columns& B, const int* tb) {
+  const double d = unit_scale_normal(A, ta).dot(unit_scale_normal(B, tb));
+  return (d > 0) - (d < 0);
 }
 
 }  // namespace
@@ -49,8 +75,7 @@ void FoldCheck::prepare(const Positions& S, const Faces& Fs, const Positions& B,
       const Vec3 centroid = (S.row(Fs(f, 0)) + S.row(Fs(f, 1)) + S.row(Fs(f, 2))) / 3;
       r = reference_[f] = query->query(centroid).face;
     }
-    const double d = dot_of_normals(s, &Fs(f, 0), b, &Fb(r, 0));
-    rest_sign_[f] = static_cast<signed char>((d > 0) - (d < 0));
+    rest_sign_[f] = static_cast<signed char>(orientation(s, &Fs(f, 0), b, &Fb(r, 0)));
   }
 }
 
@@ -63,18 +88,34 @@ int FoldCheck::count(const Positions& S_deformed, const Positions& B_deformed) c
   const int* const fb = shared_ ? fs : base_faces_.data();
   const int* const ref = shared_ ? nullptr : reference_.data();
   const signed char* const rest = rest_sign_.data();
-  std::atomic<int> folded{0};
-  parallel_for_chunks(static_cast<long>(faces_.rows()), [=, &folded](long begin, long end) {
-    int n = 0;
+  std::atomic<int> folded{0}, unsure{0};
+  parallel_for_chunks(static_cast<long>(faces_.rows()), [=, &folded, &unsure](long begin, long end) {
+    int n = 0, u = 0;
     for (long f = begin; f < end; ++f) {
       // Folded when the orientation changed sign: (n_S' · n_B') · rest < 0. Branch-free: a data-dependent
-      // branch per triangle (skip the uncounted ones, compare signs) costs half of the pass.
+      // branch per triangle (skip the uncounted ones, compare signs) costs half of the pass. A product that
+      // is zero, subnormal or not finite (a collapsed triangle, or sizes beyond 1e±77) is unsure.
       const double d = dot_of_normals(s, fs + 3 * f, b, fb + 3 * (ref ? ref[f] : f));
       n += d * rest[f] < 0;
+      const double m = std::abs(d);
+      u += (rest[f] != 0) & !(m >= std::numeric_limits<double>::min() && m <= std::numeric_limits<double>::max());
     }
     folded += n;
+    unsure += u;
   });
-  return folded;
+  if (unsure == 0) return folded;
+  // Rare: the pass again, deciding the unsure triangles from normals scaled to unit size.
+  int recount = 0;
+  for (long f = 0; f < static_cast<long>(faces_.rows()); ++f) {
+    if (rest[f] == 0) continue;
+    const int* tb = fb + 3 * (ref ? ref[f] : f);
+    const double d = dot_of_normals(s, fs + 3 * f, b, tb), m = std::abs(d);
+    if (m >= std::numeric_limits<double>::min() && m <= std::numeric_limits<double>::max())
+      recount += d * rest[f] < 0;
+    else
+      recount += orientation(s, fs + 3 * f, b, tb) == -rest[f];
+  }
+  return recount;
 }
 
 }  // namespace msd

@@ -15,10 +15,13 @@ class FoldCheck {
  public:
   //! S: #Vs by 3 with faces Fs; B: #Vb by 3 with faces Fb. With identical connectivity triangle t of S is
   //! compared with triangle t of B; otherwise with the base triangle closest to its centroid (Embree).
-  //! Triangles of S or B of zero area at rest are not counted. \throw InvalidInput for an index out of range.
+  //! Triangles of S or B of zero area at rest (below 1e-14 of their squared longest edge, as in
+  //! cotan_laplacian: their orientation is rounding noise) are not counted. \throw InvalidInput for an index
+  //! out of range.
   void prepare(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb);
-  //! Triangles of S' (#Vs by 3) whose orientation against B' (#Vb by 3) differs from the rest pose. O(#Fs),
-  //! parallel, allocation-free. \throw UsageError before prepare() or for wrong row counts.
+  //! Triangles of S' (#Vs by 3) whose orientation against B' (#Vb by 3) differs from the rest pose, right at
+  //! any finite size. O(#Fs), parallel, allocation-free (a second, serial pass only in a frame with a
+  //! collapsed triangle or sizes beyond 1e±77). \throw UsageError before prepare() or for wrong row counts.
   int count(const Positions& S_deformed, const Positions& B_deformed) const;
 
  private:

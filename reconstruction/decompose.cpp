@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "msdeform/core/adjacency.h"
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/laplacian.h"
@@ -176,6 +177,12 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
   }
   report.area_ratio = free_area_ratio(S, d.base, F, region);
   report.warning = check_decomposition(report, o, S.rows());
+  report.all_boundary = (o.kind == DecompositionKind::LowPass || o.kind == DecompositionKind::Remeshed) &&
+                        boundary_vertices(F, static_cast<int>(S.rows())).size() == static_cast<size_t>(S.rows());
+  if (report.all_boundary)
+    report.warning = "multiscale: every vertex lies on the mesh boundary, which the low-pass base keeps in place, so "
+                     "the base is the mesh itself and there are no details to keep: the edit is the base deformer's "
+                     "alone";
   if (o.kind == DecompositionKind::Remeshed)
     remesh_base(S, region, o.remesh_edge_length > 0 ? o.remesh_edge_length : mean_edge_length(S, F), d);
   // Without a detail layer (B = S, see low_pass_base) every encoding would give S' = B'.

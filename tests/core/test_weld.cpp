@@ -75,6 +75,21 @@ TEST_CASE("weld: a plane split along a seam is counted, welded for the method an
   CHECK_THROWS_AS(welded.weld->unweld(split.P), InvalidInput);
 }
 
+TEST_CASE("weld: pieces touching at a point are no seam (welding would pinch them)", "[core][weld]") {
+  // Two triangles whose corners 1 and 3 coincide, and no edge does (CGAL's elephant-with-holes has 65
+  // such points where holes meet); then a copy of the edge 1-2, which is a seam.
+  Positions P(6, 3);
+  P << 0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 0, 0, 2, 0, 0, 2, -1, 0;
+  Faces F(2, 3);
+  F << 0, 1, 2, 3, 5, 4;
+  CHECK(count_seam_vertices(P, F) == 0);
+  Positions Q(7, 3);
+  Q << P, 0, 1, 0;  // vertex 6 is a copy of vertex 2: the edges 1-2 and 3-6 coincide
+  Faces G(3, 3);
+  G << F, 3, 6, 5;
+  CHECK(count_seam_vertices(Q, G) == 4);  // 1 and its copy 3, 2 and its copy 6
+}
+
 TEST_CASE("weld: a distance joins near vertices, conflicting labels and bad distances are refused", "[core][weld]") {
   Positions P(4, 3);
   P << 0, 0, 0, 1, 0, 0, 0, 1, 0, 1e-7, 0, 0;

@@ -85,9 +85,26 @@ TEST_CASE("low-pass base: a given scale is used as is, bad options are refused",
   CHECK(report.candidates.empty());
   options.detail_scale = -1;
   CHECK_THROWS_AS(low_pass_base(s.P, s.F, options), InvalidInput);
+  options.detail_scale = 1e100;  // (L/2π)⁴ overflows: refused by its cause, not as a non-finite solve
+  CHECK_THROWS_WITH(low_pass_base(s.P, s.F, options), Contains("1e+100") && Contains("diameter"));
   options.detail_scale = 0;
   options.max_fold_ratio = 0;
   CHECK_THROWS_WITH(low_pass_base(s.P, s.F, options), Contains("max_fold_ratio"));
+}
+
+TEST_CASE("low-pass base: a mesh whose vertices all lie on its boundary is its own base", "[decomposition][low-pass]") {
+  // A strip of 10 quads: the boundary keeps its place, so nothing is left to smooth.
+  Positions P(22, 3);
+  Faces F(20, 3);
+  for (int i = 0; i <= 10; ++i) P.row(2 * i) << i, 0, 0.1 * (i % 2), P.row(2 * i + 1) << i, 1, 0;
+  for (int i = 0; i < 10; ++i) F.row(2 * i) << 2 * i, 2 * i + 2, 2 * i + 3, F.row(2 * i + 1) << 2 * i, 2 * i + 3, 2 * i + 1;
+  for (const double scale : {0.0, 0.5}) {
+    LowPassOptions options;
+    options.detail_scale = scale;
+    LowPassReport report;
+    CHECK(low_pass_base(P, F, options, &report) == P);
+    CHECK(report.detail_scale == 0);
+  }
 }
 
 TEST_CASE("detail check: the fold ratio is height over curvature radius on a sphere", "[decomposition][low-pass]") {

@@ -57,3 +57,37 @@ TEST_CASE("fold check: other connectivity, and misuse", "[detail][fold]") {
   CHECK(folds.count(mirrored, Pc) > static_cast<int>(F.rows()) / 4);
   CHECK_THROWS_AS(folds.count(P, P), UsageError);
 }
+
+TEST_CASE("fold check: a zero-area triangle at rest is not counted, a real turn is", "[detail][fold]") {
+  // Triangle 0 of S is a sliver of relative area 1e-15 (its orientation at rest is rounding noise);
+  // triangle 1 is sound. The base has both sound and facing +z.
+  Positions S(4, 3), B(4, 3);
+  S << 0, 0, 0, 1, 0, 0, 0.5, -1e-15, 0, 0.5, 0.5, 0;
+  B = S;
+  B.row(2) << 0.5, 0.3, 0;
+  Faces F(2, 3);
+  F << 0, 1, 2, 0, 1, 3;
+  FoldCheck folds;
+  folds.prepare(S, F, B, F);
+  Positions moved = S;
+  moved(2, 1) = 1e-15;  // the sliver's noise flips sign: not a fold
+  CHECK(folds.count(moved, B) == 0);
+  moved.row(3) << 0.5, -0.5, 0;  // triangle 1 turns over its base
+  CHECK(folds.count(moved, B) == 1);
+}
+
+TEST_CASE("fold check: right at any finite size (products of normals beyond 1e+-308)", "[detail][fold]") {
+  SceneOptions o;
+  o.resolution = 2000;
+  const Scene s = make_surface(SceneShape::Plane, o);
+  for (const double scale : {1e160, 1e-100}) {
+    INFO("scale " << scale);
+    const Positions S = scale * s.P, B = scale * s.smooth;
+    FoldCheck folds;
+    folds.prepare(S, s.F, B, s.F);
+    CHECK(folds.count(S, B) == 0);
+    Positions mirrored = S;
+    mirrored.col(0) *= -1;
+    CHECK(folds.count(mirrored, B) == static_cast<int>(s.F.rows()));
+  }
+}

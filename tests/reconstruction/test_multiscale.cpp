@@ -1,5 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <tuple>
+
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/core/scenes.h"
@@ -274,6 +277,45 @@ TEST_CASE("multiscale: every fixed and handle vertex ends exactly at p or T p, a
         err = std::max(err, (Vec3(out.row(v)) - (k < 0 ? Vec3(P.row(v)) : transform_point(T[k], P.row(v)))).norm());
       }
       CHECK(err == 0);
+    }
+  }
+}
+
+TEST_CASE("multiscale: a mesh with no interior vertex (a strip, a triangle) is the base deformer's edit, with a warning",
+          "[reconstruction][multiscale]") {
+  // A strip of 10 quads, fixed at x = 0, the handle at x = 10; and one triangle, a corner as the handle.
+  Positions strip(22, 3);
+  Faces strip_faces(20, 3);
+  std::vector<int> codes(22, Region::kFree);
+  for (int i = 0; i <= 10; ++i) strip.row(2 * i) << i, 0, 0.1 * (i % 2), strip.row(2 * i + 1) << i, 1, 0;
+  for (int i = 0; i < 10; ++i)
+    strip_faces.row(2 * i) << 2 * i, 2 * i + 2, 2 * i + 3, strip_faces.row(2 * i + 1) << 2 * i, 2 * i + 3, 2 * i + 1;
+  codes[0] = codes[1] = Region::kFixed;
+  codes[20] = codes[21] = Region::kFirstHandle;
+  Positions triangle(3, 3);
+  triangle << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+  const Faces triangle_faces = Faces::Map(std::vector<int>{0, 1, 2}.data(), 1, 3);
+  const std::vector<int> triangle_codes{Region::kFixed, Region::kFixed, Region::kFirstHandle};
+  Mat4 T = Mat4::Identity();
+  T.block<3, 1>(0, 3) << 0, 0, 2;
+  for (const auto& [P, F, region] : {std::tuple(strip, strip_faces, Region::from_codes(codes)),
+                                     std::tuple(triangle, triangle_faces, Region::from_codes(triangle_codes))}) {
+    ShellDeformer shell;
+    shell.prepare(make_mesh(P, F), region);
+    const Positions expected = shell.deform({T});
+    for (const auto& enc : encoding_names()) {
+      INFO(enc << " on " << P.rows() << " vertices");
+      MultiscaleOptions o;
+      o.encoding.kind = encoding_kind(enc);
+      MultiscaleDeformer ms(o);
+      ms.prepare(make_mesh(P, F), region);
+      CHECK(ms.decomposition_report().all_boundary);
+      const std::vector<std::string>& warnings = ms.prepare_warnings();
+      CHECK(std::any_of(warnings.begin(), warnings.end(),
+                        [](const std::string& w) { return w.find("mesh boundary") != std::string::npos; }));
+      const Positions out = ms.deform({T});
+      CHECK(out.allFinite());
+      CHECK((out - expected).cwiseAbs().maxCoeff() < 1e-12);
     }
   }
 }

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/detail/phong.h"
@@ -17,7 +18,7 @@ namespace {
 // normal and gives no usable tangent direction.
 constexpr double kMinTangentFraction = 1e-6;
 // Faces with area below this fraction of their squared longest edge are zero-area (as in cotan_laplacian).
-constexpr double kMinAreaFraction = 1e-14;
+constexpr double kMinAreaFraction = TriangleCotangents::kDegenerateAreaRatio;
 // A vertex normal sum shorter than this fraction of its terms' total length has cancelled: no direction.
 constexpr double kMinNormalFraction = 1e-12;
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/laplacian.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/detail/closest_point.h"
@@ -31,9 +32,8 @@ inline double dot_of_normals(const phong::Columns& A, const int* ta, const phong
 }
 
 // The normal of triangle t of X scaled to a largest component of 1, from edges scaled the same way (no
-// overflow or underflow at any finite size); zero for a triangle whose area is below kMinAreaFraction of
-// its squared longest edge, as cotan_laplacian treats it: its orientation is rounding noise.
-constexpr double kMinAreaFraction = 1e-14;
+// overflow or underflow at any finite size); zero for a triangle that cotan_laplacian calls degenerate
+// (area below 1e-14 of its squared longest edge): its orientation is rounding noise.
 Vec3 unit_scale_normal(const phong::Columns& X, const int* t) {
   const Vec3 p0 = X.row(t[0]);
   Vec3 e1 = X.row(t[1]) - p0, e2 = X.row(t[2]) - p0;
@@ -42,8 +42,14 @@ Vec3 unit_scale_normal(const phong::Columns& X, const int* t) {
   e1 /= scale, e2 /= scale;
   const Vec3 n = e1.cross(e2);
   const double longest2 = std::max({e1.squaredNorm(), e2.squaredNorm(), (e2 - e1).squaredNorm()});
-  if (!(n.norm() > 2 * kMinAreaFraction * longest2)) return Vec3::Zero();
+  if (!(n.norm() > 2 * TriangleCotangents::kDegenerateAreaRatio * longest2)) return Vec3::Zero();
   return n / n.cwiseAbs().maxCoeff();
+}
+
+// A product of normals whose sign can be trusted: neither zero, subnormal nor overflowed.
+inline bool normal_range(double d) {
+  const double m = std::abs(d);
+  return m >= std::numeric_limits<double>::min() && m <= std::numeric_limits<double>::max();
 }
 
 // Sign of n_a · n_b (−1, 0 or 1), right at any finite size; 0 where either triangle is degenerate.
@@ -97,8 +103,7 @@ int FoldCheck::count(const Positions& S_deformed, const Positions& B_deformed) c
       // is zero, subnormal or not finite (a collapsed triangle, or sizes beyond 1e±77) is unsure.
       const double d = dot_of_normals(s, fs + 3 * f, b, fb + 3 * (ref ? ref[f] : f));
       n += d * rest[f] < 0;
-      const double m = std::abs(d);
-      u += (rest[f] != 0) & !(m >= std::numeric_limits<double>::min() && m <= std::numeric_limits<double>::max());
+      u += (rest[f] != 0) & !normal_range(d);
     }
     folded += n;
     unsure += u;
@@ -109,11 +114,8 @@ int FoldCheck::count(const Positions& S_deformed, const Positions& B_deformed) c
   for (long f = 0; f < static_cast<long>(faces_.rows()); ++f) {
     if (rest[f] == 0) continue;
     const int* tb = fb + 3 * (ref ? ref[f] : f);
-    const double d = dot_of_normals(s, fs + 3 * f, b, tb), m = std::abs(d);
-    if (m >= std::numeric_limits<double>::min() && m <= std::numeric_limits<double>::max())
-      recount += d * rest[f] < 0;
-    else
-      recount += orientation(s, fs + 3 * f, b, tb) == -rest[f];
+    const double d = dot_of_normals(s, fs + 3 * f, b, tb);
+    recount += normal_range(d) ? d * rest[f] < 0 : orientation(s, fs + 3 * f, b, tb) == -rest[f];
   }
   return recount;
 }

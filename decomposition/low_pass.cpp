@@ -8,6 +8,7 @@
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/solver.h"
 
@@ -43,7 +44,9 @@ class LowPassSystem {
     mass_ = lap.mass;
     const double floor = kMassFloor * std::max(mass_.mean(), 1e-300);
     Eigen::VectorXd inverse(nv);
-    std::vector<char> boundary(nv, 0);
+    std::vector<char> boundary(nv, 1);  // the mesh boundary and vertices no face uses keep their place
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) boundary[F(f, k)] = 0;
     for (int v : boundary_vertices(F, nv)) boundary[v] = 1;
     for (int v = 0; v < nv; ++v) {
       inverse[v] = (mass_[v] > 0 && !boundary[v]) ? 1 / mass_[v] : 0.0;
@@ -117,6 +120,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
   const auto t0 = std::chrono::steady_clock::now();
   check_mesh_arrays(S, F, kWho);
   if (F.rows() == 0) throw InvalidInput(std::string(kWho) + ": the mesh has no faces");
+  check_extent(S, kWho);
   if (!(options.detail_scale >= 0) || !std::isfinite(options.detail_scale))
     throw InvalidInput(std::string(kWho) + ": the detail scale must be finite and >= 0 (0 = automatic), got " +
                        std::to_string(options.detail_scale));

@@ -6,12 +6,12 @@
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/mesh.h"
 
 namespace msd {
 
 namespace {
-constexpr double kMinExtent = 1e-70, kMaxExtent = 1e70;
 std::string format_number(double x) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3g", x);
@@ -49,20 +49,8 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
   const bool surface = traits().domain == DeformerDomain::Surface;
   check_mesh_arrays(P, F, name().c_str());
   // Finite coordinates can still overflow (or underflow) the squared areas computed from them at sizes
-  // around 1e±150; say so rather than let a solver blame degenerate triangles. Sizes from 1e-70 to 1e70
-  // keep areas squared inside a double.
-  const double diagonal = P.rows() > 0 ? bounding_box_diagonal(P) : 0;
-  const double largest = P.rows() > 0 ? P.cwiseAbs().maxCoeff() : 0.0;
-  const double extent = std::max(diagonal, largest);
-  if (P.rows() > 0 && diagonal == 0)
-    throw InvalidInput(name() + ": the input has no extent (all its " + std::to_string(P.rows()) +
-                       " vertices are at one point)");
-  if (!(extent < kMaxExtent) || (P.rows() > 0 && diagonal < kMinExtent))
-    throw InvalidInput(name() + ": coordinates too " + (extent < kMaxExtent ? "small" : "large") +
-                       ": the bounding-box diagonal is " +
-                       (std::isfinite(diagonal) ? format_number(diagonal) : std::string("beyond the largest double")) +
-                       " and the largest |coordinate| " + format_number(largest) + "; msdeform works with sizes from 1e-70 to 1e70 (squared areas must fit "
-                       "a double): rescale the input");
+  // around 1e±150; say so rather than let a solver blame degenerate triangles.
+  check_extent(P, name());
   if (surface && F.rows() == 0)
     throw InvalidInput(name() + ": a surface method needs triangles, and the input has none");
   region.validate(static_cast<int>(P.rows()), surface ? &F : nullptr);

@@ -7,6 +7,7 @@
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/decomposition/remesh.h"
@@ -129,6 +130,7 @@ DecompositionKind decomposition_kind(const std::string& name) {
 
 Decomposition decompose(const Positions& S, const Faces& F, const Region& region, const DecompositionOptions& o) {
   check_mesh_arrays(S, F, "decompose");
+  check_extent(S, "decompose");
   if (region.num_vertices() != S.rows())
     throw InvalidInput("decompose: the region has " + std::to_string(region.num_vertices()) +
                        " vertex labels but the mesh has " + std::to_string(S.rows()) + " vertices");
@@ -177,12 +179,16 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
   }
   report.area_ratio = free_area_ratio(S, d.base, F, region);
   report.warning = check_decomposition(report, o, S.rows());
-  report.all_boundary = (o.kind == DecompositionKind::LowPass || o.kind == DecompositionKind::Remeshed) &&
-                        boundary_vertices(F, static_cast<int>(S.rows())).size() == static_cast<size_t>(S.rows());
+  if (o.kind == DecompositionKind::LowPass || o.kind == DecompositionKind::Remeshed) {
+    std::vector<char> used(static_cast<size_t>(S.rows()), 0);  // vertices no face uses do not count
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) used[F(f, k)] = 1;
+    report.all_boundary = boundary_vertices(F, static_cast<int>(S.rows())).size() ==
+                          static_cast<size_t>(std::count(used.begin(), used.end(), 1));
+  }
   if (report.all_boundary)
     report.warning = "multiscale: every vertex lies on the mesh boundary, which the low-pass base keeps in place, so "
-                     "the base is the mesh itself and there are no details to keep: the edit is the base deformer's "
-                     "alone";
+                     "the base is the mesh itself and there are no details (an edit is the base method's alone)";
   if (o.kind == DecompositionKind::Remeshed)
     remesh_base(S, region, o.remesh_edge_length > 0 ? o.remesh_edge_length : mean_edge_length(S, F), d);
   // Without a detail layer (B = S, see low_pass_base) every encoding would give S' = B'.

@@ -98,13 +98,26 @@ TEST_CASE("low-pass base: a mesh whose vertices all lie on its boundary is its o
   Faces F(20, 3);
   for (int i = 0; i <= 10; ++i) P.row(2 * i) << i, 0, 0.1 * (i % 2), P.row(2 * i + 1) << i, 1, 0;
   for (int i = 0; i < 10; ++i) F.row(2 * i) << 2 * i, 2 * i + 2, 2 * i + 3, F.row(2 * i + 1) << 2 * i, 2 * i + 3, 2 * i + 1;
-  for (const double scale : {0.0, 0.5}) {
-    LowPassOptions options;
-    options.detail_scale = scale;
-    LowPassReport report;
-    CHECK(low_pass_base(P, F, options, &report) == P);
-    CHECK(report.detail_scale == 0);
-  }
+  Positions Q(24, 3);  // the same with two vertices no face uses
+  Q << P, 5, 5, 1, 6, 5, 1;
+  for (const Positions& X : {P, Q})
+    for (const double scale : {0.0, 0.5}) {
+      LowPassOptions options;
+      options.detail_scale = scale;
+      LowPassReport report;
+      CHECK(low_pass_base(X, F, options, &report) == X);
+      CHECK(report.detail_scale == 0);
+    }
+}
+
+TEST_CASE("low-pass base: sizes outside 1e-70..1e70 and meshes without extent are refused", "[decomposition][low-pass]") {
+  SceneOptions o;
+  o.resolution = 500;
+  const Scene s = make_surface(SceneShape::Plane, o);
+  // 1e160 overflowed the squared areas (the factorisation then never finished); one point gave a base.
+  CHECK_THROWS_WITH(low_pass_base(1e160 * s.P, s.F), Contains("coordinates too large") && Contains("1e+160"));
+  CHECK_THROWS_WITH(low_pass_base(1e-100 * s.P, s.F), Contains("coordinates too small"));
+  CHECK_THROWS_WITH(low_pass_base(Positions::Zero(s.P.rows(), 3), s.F), Contains("no extent"));
 }
 
 TEST_CASE("detail check: the fold ratio is height over curvature radius on a sphere", "[decomposition][low-pass]") {

@@ -1,0 +1,23 @@
+#pragma once
+//! \file The size range msdeform computes in: squared areas of triangles must fit a double, so positions
+//! must span at least 1e-70 and stay below 1e70 (mesh units).
+
+#include <string>
+
+#include "msdeform/core/types.h"
+
+namespace msd {
+
+//! Smallest bounding-box diagonal and largest |coordinate| that every computation holds.
+constexpr double kMinExtent = 1e-70, kMaxExtent = 1e70;
+
+//! Bounding-box diagonal of P (#V by 3), without overflow for any finite coordinates (inf only when the
+//! diagonal itself exceeds the largest double); 0 for fewer than two points.
+double safe_bounding_box_diagonal(const Positions& P);
+
+//! Refuses positions P (#V by 3; none is fine) with no extent (every vertex at one point), a bounding-box
+//! diagonal below kMinExtent, or a diagonal or a coordinate of kMaxExtent or more. Coordinates must be finite (checked
+//! before). \throw InvalidInput starting with `who`, naming the diagonal and the largest |coordinate|.
+void check_extent(const Positions& P, const std::string& who);
+
+}  // namespace msd

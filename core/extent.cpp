@@ -7,13 +7,12 @@
 #include "msdeform/core/errors.h"
 
 namespace msd {
-namespace {
+
 std::string format_number(double x) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3g", x);
   return text;
 }
-}  // namespace
 
 double safe_bounding_box_diagonal(const Positions& P) {
   if (P.rows() < 2) return 0.0;

@@ -11,6 +11,9 @@ namespace msd {
 //! Smallest bounding-box diagonal and largest |coordinate| that every computation holds.
 constexpr double kMinExtent = 1e-70, kMaxExtent = 1e70;
 
+//! x with 3 significant digits ("%.3g"), for messages about sizes.
+std::string format_number(double x);
+
 //! Bounding-box diagonal of P (#V by 3), without overflow for any finite coordinates (inf only when the
 //! diagonal itself exceeds the largest double); 0 for fewer than two points.
 double safe_bounding_box_diagonal(const Positions& P);

@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <string>
 
 #include "msdeform/core/adjacency.h"
@@ -27,12 +26,6 @@ constexpr double kDefectFraction = 1e-3;
 constexpr double kMinAreaRatio = 0.5;
 // A given detail scale above this many diameters of S is refused (see low_pass_base).
 constexpr double kMaxScaleOverDiameter = 1e6;
-
-std::string format_number(double x) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3g", x);
-  return text;
-}
 
 // (M + ℓ⁴ W M̃⁻¹ W) B = M S on the vertices off the mesh boundary, B = S on it; prepared once per mesh,
 // solve() refactors for each ℓ (same pattern). Coordinates are relative to the centroid of S.

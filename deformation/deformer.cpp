@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
@@ -10,14 +9,6 @@
 #include "msdeform/core/mesh.h"
 
 namespace msd {
-
-namespace {
-std::string format_number(double x) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3g", x);
-  return text;
-}
-}  // namespace
 
 void check_affine(const std::vector<Mat4>& transforms, const std::string& who) {
   for (size_t k = 0; k < transforms.size(); ++k) {

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/core/scenes.h"
 #include "msdeform/core/surface_check.h"
@@ -61,7 +62,7 @@ EditCase weld_case(EditCase c, double eps) {
         first[w] = v;
       } else if (codes[w] != c.region.code(v)) {
         throw InvalidInput("weld: vertices " + std::to_string(first[w]) + " and " + std::to_string(v) +
-                           " are welded (within " + std::to_string(eps) + ") but have region labels " +
+                           " are welded (within " + format_number(eps) + ") but have region labels " +
                            std::to_string(codes[w]) + " and " + std::to_string(c.region.code(v)));
       }
     }

@@ -12,13 +12,14 @@
 #include "msdeform/core/checks.h"
 #include "msdeform/core/disjoint_sets.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 
 namespace msd {
 namespace {
 
 void check(const Positions& P, const Faces& F, double eps, const char* who) {
   if (!(eps >= 0) || !std::isfinite(eps))
-    throw InvalidInput(std::string(who) + ": the distance must be finite and >= 0, got " + std::to_string(eps));
+    throw InvalidInput(std::string(who) + ": the distance must be finite and >= 0, got " + format_number(eps));
   check_faces(F, P.rows(), who, "the mesh");
 }
 

@@ -46,7 +46,12 @@ void add_deform_command(CLI::App& app) {
   auto weld = std::make_shared<double>(0);
   CLI::Option* weld_option = cmd->add_option("--weld", *weld,
                   "Weld vertices within EPS (mesh units; 0: identical coordinates) before deforming, so a mesh split "
-                  "along seams deforms as one surface; the output keeps the file's vertices and faces");
+                  "along seams deforms as one surface; the output keeps the file's vertices and faces")
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            return text.size() > 1 && text[0] == '-' ? std::string("a distance must be >= 0, got ") + text : std::string();
+          },
+          "EPS>=0"));
   auto quiet = std::make_shared<bool>(false);
   cmd->add_flag("-q,--quiet", *quiet, "No progress lines on stderr (warnings still print)");
   auto render_output = std::make_shared<std::string>();

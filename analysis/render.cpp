@@ -14,6 +14,7 @@
 #include "msdeform/core/atomic_file.h"
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
@@ -49,12 +50,6 @@ Vec3 to_display(const Vec3& c) {
 Vec3 background(const RenderOptions& o, int row, int height) {
   const double t = height > 1 ? static_cast<double>(row) / (height - 1) : 0.0;
   return (1 - t) * o.background_top + t * o.background_bottom;
-}
-
-std::string format_number(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.3g", x);
-  return buffer;
 }
 
 // The closest hit of a ray: the primitive (a face, or a point of a cloud), the barycentrics of corners 1

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/mesh.h"
 
 namespace msd {
 
@@ -14,16 +15,9 @@ std::string format_number(double x) {
   return text;
 }
 
-double safe_bounding_box_diagonal(const Positions& P) {
-  if (P.rows() < 2) return 0.0;
-  const Vec3 span = P.colwise().maxCoeff() - P.colwise().minCoeff();
-  const double scale = span.cwiseAbs().maxCoeff();
-  return scale > 0 && std::isfinite(scale) ? scale * (span / scale).norm() : scale;
-}
-
 void check_extent(const Positions& P, const std::string& who) {
   if (P.rows() == 0) return;
-  const double diagonal = safe_bounding_box_diagonal(P);
+  const double diagonal = bounding_box_diagonal(P);
   const double largest = P.cwiseAbs().maxCoeff();
   if (diagonal == 0)
     throw InvalidInput(who + ": the input has no extent (all its " + std::to_string(P.rows()) +

@@ -14,10 +14,6 @@ constexpr double kMinExtent = 1e-70, kMaxExtent = 1e70;
 //! x with 3 significant digits ("%.3g"), for messages about sizes.
 std::string format_number(double x);
 
-//! Bounding-box diagonal of P (#V by 3), without overflow for any finite coordinates (inf only when the
-//! diagonal itself exceeds the largest double); 0 for fewer than two points.
-double safe_bounding_box_diagonal(const Positions& P);
-
 //! Refuses positions P (#V by 3; none is fine) with no extent (every vertex at one point), a bounding-box
 //! diagonal below kMinExtent, or a diagonal or a coordinate of kMaxExtent or more. Coordinates must be finite (checked
 //! before). \throw InvalidInput starting with `who`, naming the diagonal and the largest |coordinate|.

@@ -185,7 +185,11 @@ VertexFaces vertex_faces(const Faces& F, int num_vertices) {
 
 double bounding_box_diagonal(const Positions& P) {
   if (P.rows() < 2) return 0.0;
-  return (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm();
+  const Vec3 span = P.colwise().maxCoeff() - P.colwise().minCoeff();
+  const double diagonal = span.norm();
+  // Beyond about 1e±154 the squared length overflows or underflows: Eigen's scaled norm then (the plain one
+  // elsewhere, so every other result stays as it was).
+  return std::isfinite(diagonal) && diagonal > 1e-150 ? diagonal : span.stableNorm();
 }
 
 }  // namespace msd

@@ -126,15 +126,16 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
 
   // Far beyond the diameter the filter keeps only S's affine part, and (L/2π)⁴ overflows the system's
   // entries long before L reaches the largest double.
-  if (options.detail_scale > kMaxScaleOverDiameter * diameter(S))
+  if (const double size = diameter(S); options.detail_scale > kMaxScaleOverDiameter * size)
     throw InvalidInput(std::string(kWho) + ": the detail scale " + format_number(options.detail_scale) +
                        " is more than " + format_number(kMaxScaleOverDiameter) + " times the mesh's diameter " +
-                       format_number(diameter(S)) + " (mesh units); a detail scale is a feature length on the mesh");
+                       format_number(size) + " (mesh units); a detail scale is a feature length on the mesh");
   LowPassReport r;
   r.mean_edge_length = mean_edge_length(S, F);
   LowPassSystem system(S, F);
   Positions B;
-  if (system.all_known()) {  // no detail layer: the base is S (decompose() says why)
+  if (system.all_known()) {  // no detail layer: the base is S
+    r.all_boundary = true;
     r.automatic = options.detail_scale == 0;
     B = S;
     r.check = check_details(S, B, F);

@@ -55,6 +55,9 @@ struct LowPassReport {
   double mean_edge_length = 0;
   std::vector<LowPassCandidate> candidates;  //!< what the automatic choice evaluated, in that order
   DetailCheck check;                         //!< of the returned base
+  //! Every vertex a face uses lies on the mesh boundary (a strip, one triangle), which the low-pass keeps in
+  //! place: B = S, no details.
+  bool all_boundary = false;
   double seconds = 0;
 };
 

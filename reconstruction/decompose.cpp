@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 
-#include "msdeform/core/adjacency.h"
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/extent.h"
@@ -179,14 +178,7 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
   }
   report.area_ratio = free_area_ratio(S, d.base, F, region);
   report.warning = check_decomposition(report, o, S.rows());
-  if (o.kind == DecompositionKind::LowPass || o.kind == DecompositionKind::Remeshed) {
-    std::vector<char> used(static_cast<size_t>(S.rows()), 0);  // vertices no face uses do not count
-    for (Eigen::Index f = 0; f < F.rows(); ++f)
-      for (int k = 0; k < 3; ++k) used[F(f, k)] = 1;
-    report.all_boundary = boundary_vertices(F, static_cast<int>(S.rows())).size() ==
-                          static_cast<size_t>(std::count(used.begin(), used.end(), 1));
-  }
-  if (report.all_boundary)
+  if (report.low_pass.all_boundary)
     report.warning = "multiscale: every vertex lies on the mesh boundary, which the low-pass base keeps in place, so "
                      "the base is the mesh itself and there are no details (an edit is the base method's alone)";
   if (o.kind == DecompositionKind::Remeshed)

@@ -52,9 +52,6 @@ struct DecompositionReport {
   int remeshed_vertices = 0;  //!< Remeshed: vertices of the new base
   double remesh_edge_length = 0;  //!< Remeshed: the edge length used
   int control_vertices = 0;   //!< Subdivision: vertices of the control mesh
-  //! LowPass, Remeshed: every vertex lies on the mesh boundary (a strip, one triangle), which the low-pass
-  //! keeps in place: B = S, no details.
-  bool all_boundary = false;
   //! Non-empty when a few vertices' details fold at rest (at most 0.1 % of them: mesh defects) or the
   //! details stand taller than LowPassOptions::max_fold_ratio of the base's curvature radius: the edit
   //! may fold them; says what to change.

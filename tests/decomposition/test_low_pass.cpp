@@ -107,6 +107,7 @@ TEST_CASE("low-pass base: a mesh whose vertices all lie on its boundary is its o
       LowPassReport report;
       CHECK(low_pass_base(X, F, options, &report) == X);
       CHECK(report.detail_scale == 0);
+      CHECK(report.all_boundary);
     }
 }
 

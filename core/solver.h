@@ -35,7 +35,8 @@ class SparseSPDSolver {
   void solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X) const;
   Eigen::MatrixXd solve(const Eigen::MatrixXd& B) const;
 
-  //! Which backend this build uses: "CHOLMOD supernodal" or "Eigen SimplicialLDLT".
+  //! Which backend this build uses: "CHOLMOD supernodal" (with the OpenBLAS kernels in use, e.g.
+  //! "CHOLMOD supernodal, OpenBLAS SkylakeX kernels") or "Eigen SimplicialLDLT".
   static std::string backend();
   //! Non-zeros of the Cholesky factor (fill-in measure), 0 before factor().
   double factor_nonzeros() const;

@@ -1,4 +1,8 @@
 #include <catch2/catch.hpp>
+#include <dlfcn.h>
+#include <strings.h>
+
+#include <cstdlib>
 
 #include <Eigen/Dense>
 
@@ -33,6 +37,29 @@ TEST_CASE("SparseSPDSolver solves several right-hand sides at once", "[core][sol
   solver.solve(B, X2);
   CHECK((X2 - X).norm() == 0.0);
   CHECK(solver.factor_nonzeros() > 0);
+}
+
+TEST_CASE("OpenBLAS behind CHOLMOD uses the kernels the CPU allows, not its Prescott fallback", "[core][solver]") {
+  // OpenBLAS 0.3.21 (Debian 12) falls back to SSE3 kernels on CPU models it does not know; the solver then
+  // selects kernels by the CPU's features (core/solver.cpp). Only meaningful with OpenBLAS as the BLAS, on
+  // an x86 CPU with AVX2 and FMA, and without a user's OPENBLAS_CORETYPE.
+  using CoreName = char* (*)();
+  const auto corename = reinterpret_cast<CoreName>(dlsym(RTLD_DEFAULT, "openblas_get_corename"));
+#if defined(__x86_64__) || defined(__i386__)
+  const bool modern = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+  const bool modern = false;
+#endif
+  if (!corename || !modern || std::getenv("OPENBLAS_CORETYPE")) return;
+  Positions P;
+  Faces F;
+  SparseMatrix A = test_matrix(P, F);
+  A.diagonal().array() += 1.0;
+  SparseSPDSolver solver;
+  solver.factor(A);
+  INFO("backend " << SparseSPDSolver::backend());
+  CHECK(strcasecmp(corename(), "prescott") != 0);
+  CHECK(SparseSPDSolver::backend().find(corename()) != std::string::npos);
 }
 
 TEST_CASE("SparseSPDSolver::refactor reuses the analysis for new values on the same pattern", "[core][solver]") {

@@ -1,7 +1,6 @@
 #include "msdeform/core/adjacency.h"
 
 #include <algorithm>
-#include <cstdint>
 
 namespace msd {
 
@@ -35,21 +34,28 @@ VertexAdjacency vertex_adjacency(const Faces& F, int num_vertices) {
 }
 
 std::vector<int> boundary_vertices(const Faces& F, int num_vertices) {
-  // Undirected edges as sorted 64-bit keys; a key that occurs once is a boundary edge.
-  std::vector<std::uint64_t> edges;
-  edges.reserve(3 * F.rows());
+  // Each undirected edge filed under its smaller vertex (a counting sort, linear in #F, where one sort of
+  // all 3#F edges took 0.65 s at 1M vertices); within a vertex's few edges, one that occurs once is a
+  // boundary edge.
+  std::vector<int> start(static_cast<size_t>(num_vertices) + 1, 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++start[std::min(F(f, k), F(f, (k + 1) % 3)) + 1];
+  for (int v = 0; v < num_vertices; ++v) start[v + 1] += start[v];
+  std::vector<int> other(start.back()), fill(start.begin(), start.end() - 1);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
-      const auto a = static_cast<std::uint64_t>(F(f, k)), b = static_cast<std::uint64_t>(F(f, (k + 1) % 3));
-      edges.push_back(std::min(a, b) << 32 | std::max(a, b));
+      const int a = F(f, k), b = F(f, (k + 1) % 3);
+      other[fill[std::min(a, b)]++] = std::max(a, b);
     }
-  std::sort(edges.begin(), edges.end());
   std::vector<char> on_boundary(num_vertices, 0);
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i + 1;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    if (j - i == 1) on_boundary[edges[i] >> 32] = on_boundary[edges[i] & 0xffffffffu] = 1;
-    i = j;
+  for (int v = 0; v < num_vertices; ++v) {
+    const auto first = other.begin() + start[v], last = other.begin() + start[v + 1];
+    std::sort(first, last);
+    for (auto i = first; i != last;) {
+      const auto j = std::find_if(i, last, [&](int w) { return w != *i; });
+      if (j - i == 1) on_boundary[v] = on_boundary[*i] = 1;
+      i = j;
+    }
   }
   std::vector<int> out;
   for (int v = 0; v < num_vertices; ++v)

@@ -1,7 +1,12 @@
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <limits>
+#include <map>
+#include <random>
+#include <utility>
 
+#include "msdeform/core/adjacency.h"
 #include "msdeform/core/checks.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/scenes.h"
@@ -74,4 +79,34 @@ TEST_CASE("first_non_finite_row finds the first NaN or infinity in any column, a
   CHECK(first_non_finite_row(X) == -1);
   X(9, 0) = nan;
   CHECK_THROWS_WITH(check_finite(X, "who", "the mesh"), "who: vertex 9 of the mesh has a non-finite coordinate");
+}
+
+TEST_CASE("boundary_vertices are the ends of edges used by exactly one face, on any face list", "[core][mesh]") {
+  // Against a direct count per undirected edge, on random face lists: repeated and degenerate edges, edges of
+  // three or more faces, unused vertices.
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 500; ++trial) {
+    const int nv = 1 + static_cast<int>(rng() % 25), nf = static_cast<int>(rng() % 40);
+    Faces F(nf, 3);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) F(f, k) = static_cast<int>(rng() % nv);
+    std::map<std::pair<int, int>, int> uses;
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int a = F(f, k), b = F(f, (k + 1) % 3);
+        ++uses[{std::min(a, b), std::max(a, b)}];
+      }
+    std::vector<char> expected(nv, 0);
+    for (const auto& [edge, count] : uses)
+      if (count == 1) expected[edge.first] = expected[edge.second] = 1;
+    std::vector<int> want;
+    for (int v = 0; v < nv; ++v)
+      if (expected[v]) want.push_back(v);
+    INFO("trial " << trial);
+    CHECK(boundary_vertices(F, nv) == want);
+  }
+  const Scene plane = make_scene("lift", SceneOptions{});
+  const auto side = static_cast<size_t>(std::lround(std::sqrt(static_cast<double>(plane.P.rows()))));
+  REQUIRE(side * side == static_cast<size_t>(plane.P.rows()));  // the bumpy plane is a square grid
+  CHECK(boundary_vertices(plane.F, static_cast<int>(plane.P.rows())).size() == 4 * (side - 1));
 }

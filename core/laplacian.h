@@ -69,6 +69,11 @@ LaplaceOperator laplace_operator(const Positions& P, const Faces& F, LaplacianWe
 //! (their rows then only keep Q₁'s part). \throw InvalidInput for k outside 1..3.
 SparseMatrix polyharmonic_matrix(const LaplaceOperator& op, int k);
 
+//! W diag(w) W (#V by #V) for a symmetric W (#V by #V, both triangles stored) and weights w (#V): the
+//! thin-plate matrix Q₂ = W M⁻¹ W with w = M⁻¹, or the low-pass base's bending term. Its pattern is W's
+//! 2-ring. Computed on both cores, with the values of Eigen's W * (w.asDiagonal() * W) bit for bit.
+SparseMatrix weighted_square(const SparseMatrix& W, const Eigen::VectorXd& w);
+
 //! Mean length of the three edges of every face of (P, F) (interior edges count twice); 0 without faces.
 double mean_edge_length(const Positions& P, const Faces& F);
 

@@ -47,12 +47,11 @@ class LowPassSystem {
       (boundary[v] ? known_ : unknown_).push_back(v);
     }
     if (unknown_.empty()) return;  // every vertex on the boundary: B = S, no system to build
-    const SparseMatrix bending = lap.W * inverse.asDiagonal() * lap.W;
+    const SparseMatrix bending = weighted_square(lap.W, inverse);
     bending_uu_ = submatrix(bending, unknown_, unknown_);
     if (!known_.empty()) bending_uk_ = submatrix(bending, unknown_, known_);
-    Eigen::VectorXd mass_u(static_cast<Eigen::Index>(unknown_.size()));
-    for (size_t u = 0; u < unknown_.size(); ++u) mass_u[u] = mass_[unknown_[u]];
-    mass_uu_ = SparseMatrix(mass_u.asDiagonal());
+    mass_u_.resize(static_cast<Eigen::Index>(unknown_.size()));
+    for (size_t u = 0; u < unknown_.size(); ++u) mass_u_[u] = mass_[unknown_[u]];
     centroid_ = S.colwise().mean();
     centred_ = S.rowwise() - centroid_.transpose();
     known_values_.resize(static_cast<Eigen::Index>(known_.size()), 3);
@@ -64,7 +63,8 @@ class LowPassSystem {
 
   Positions solve(double detail_scale) {
     const double l = detail_scale / (2 * kPi), l4 = l * l * l * l;
-    const SparseMatrix Auu = l4 * bending_uu_ + mass_uu_;  // the mass is 0 off the diagonal of (u, k)
+    SparseMatrix Auu = l4 * bending_uu_;  // + M on the diagonal; the mass is 0 off the diagonal of (u, k)
+    for (Eigen::Index u = 0; u < Auu.cols(); ++u) Auu.coeffRef(u, u) += mass_u_[u];
     try {
       if (solver_.factored())
         solver_.refactor(Auu);
@@ -92,7 +92,8 @@ class LowPassSystem {
 
  private:
   Eigen::VectorXd mass_;
-  SparseMatrix bending_uu_, bending_uk_, mass_uu_;  // W M̃⁻¹ W and M on (unknown, unknown), (unknown, known)
+  SparseMatrix bending_uu_, bending_uk_;  // W M̃⁻¹ W on (unknown, unknown), (unknown, known)
+  Eigen::VectorXd mass_u_;                // M on the unknowns
   Vec3 centroid_;
   Positions centred_;
   std::vector<int> known_, unknown_;  // mesh-boundary vertices (B = S) and the others

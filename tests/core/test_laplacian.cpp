@@ -143,3 +143,48 @@ TEST_CASE("cotan Laplacian: negative semi-definite for any triangle, needles inc
     CHECK(eig.maxCoeff() <= 1e-9 * std::max(largest, 1.0));
   }
 }
+
+TEST_CASE("weighted_square is Eigen's W diag(w) W bit for bit, submatrix is the dense extraction", "[core][laplacian]") {
+  SceneOptions options;
+  options.resolution = 20000;  // over the parallel grain: both cores take part
+  const Scene scene = make_scene("lift", options);
+  const LaplaceOperator lap = cotan_laplacian(scene.P, scene.F);
+  Eigen::VectorXd w = lap.mass.cwiseInverse();
+  for (Eigen::Index v = 0; v < w.size(); v += 97) w[v] = 0;  // zero weights keep the pattern, as Eigen does
+  const SparseMatrix eigen_product = lap.W * SparseMatrix(w.asDiagonal() * lap.W);
+  const SparseMatrix Q = weighted_square(lap.W, w);
+  REQUIRE(Q.nonZeros() == eigen_product.nonZeros());
+  bool same = true;
+  for (Eigen::Index j = 0; j < Q.outerSize(); ++j) {
+    SparseMatrix::InnerIterator a(Q, j), b(eigen_product, j);
+    for (; a && b; ++a, ++b) same = same && a.row() == b.row() && a.value() == b.value();
+    same = same && !a && !b;
+  }
+  CHECK(same);
+
+  // Rows in shuffled order, columns a subset: entries keep their list order, rows ascend in each column.
+  std::vector<int> rows, cols;
+  for (int v = 0; v < static_cast<int>(scene.P.rows()); ++v) (v % 3 ? rows : cols).push_back(v);
+  std::shuffle(rows.begin(), rows.end(), std::mt19937(5));
+  const SparseMatrix S = submatrix(Q, rows, cols);
+  REQUIRE(S.rows() == static_cast<Eigen::Index>(rows.size()));
+  REQUIRE(S.cols() == static_cast<Eigen::Index>(cols.size()));
+  double difference = 0;
+  bool ascending = true;
+  long entries = 0;
+  for (Eigen::Index c = 0; c < S.outerSize(); ++c) {
+    Eigen::Index previous = -1;
+    for (SparseMatrix::InnerIterator it(S, c); it; ++it) {
+      ascending = ascending && it.row() > previous;
+      previous = it.row();
+      difference = std::max(difference, std::abs(it.value() - Q.coeff(rows[it.row()], cols[c])));
+    }
+  }
+  std::vector<char> is_row(Q.rows(), 0);
+  for (int r : rows) is_row[r] = 1;
+  for (int c : cols)
+    for (SparseMatrix::InnerIterator it(Q, c); it; ++it) entries += is_row[it.row()];
+  CHECK(S.nonZeros() == entries);
+  CHECK(difference == 0.0);
+  CHECK(ascending);
+}

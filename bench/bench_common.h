@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "msdeform/core/blas_kernels.h"
+
 namespace msd::bench {
 
 // A bad argument (an unknown size, a mesh too small for a scene) ends a benchmark with the exception's
@@ -25,6 +27,9 @@ inline const bool kExitWithMessage = [] {
   });
   return true;
 }();
+
+// CHOLMOD's BLAS on the kernels this CPU allows (core/blas_kernels.h), before main: no thread uses BLAS yet.
+inline const std::string kBlasKernels = msd::select_blas_kernels();
 
 using Clock = std::chrono::steady_clock;
 

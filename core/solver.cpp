@@ -2,23 +2,14 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
 #include <cstring>
-#include <mutex>
-#include <strings.h>
 
+#include "msdeform/core/blas_kernels.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/laplacian.h"
 
 #ifdef MSD_HAVE_CHOLMOD
 #include <cholmod.h>
-// OpenBLAS's run-time kernel selection (DYNAMIC_ARCH builds, as Debian's). Weak: with another BLAS behind
-// CHOLMOD they are null and nothing is changed.
-extern "C" {
-char* openblas_get_corename(void) __attribute__((weak));
-void gotoblas_dynamic_init(void) __attribute__((weak));
-void gotoblas_dynamic_quit(void) __attribute__((weak));
-}
 #else
 #include <Eigen/SparseCholesky>
 #endif
@@ -32,41 +23,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 #ifdef MSD_HAVE_CHOLMOD
 
-namespace {
-// OpenBLAS before 0.3.25 (Debian 12 ships 0.3.21) chooses its kernels by CPU model number and, on a model
-// it does not know (Sapphire and Emerald Rapids, recent client CPUs, many virtual machines), falls back
-// to its Prescott kernels (SSE3), whatever the CPU can do (OpenBLAS issue #4267, fixed by PR #4268).
-// CHOLMOD's supernodal factorisation and solve spend most of their time in BLAS: measured on a Xeon
-// model 207 guest, the 1M-vertex lift bi-Laplacian factors in 4.5-4.7 s with the SkylakeX kernels and in
-// 6.4-8.1 s with Prescott's. So when OpenBLAS fell back, and the user has not chosen kernels with
-// OPENBLAS_CORETYPE, this reruns OpenBLAS's own selection with the kernels the CPU's features allow (the
-// path the variable takes when the library loads). Runs once, before the first CHOLMOD call.
-void select_blas_kernels() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-#if defined(__x86_64__) || defined(__i386__)
-    if (!openblas_get_corename || !gotoblas_dynamic_init || !gotoblas_dynamic_quit) return;
-    if (std::getenv("OPENBLAS_CORETYPE")) return;
-    const char* name = openblas_get_corename();
-    if (!name || strcasecmp(name, "prescott") != 0) return;
-    __builtin_cpu_init();
-    const char* core = nullptr;
-    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&
-        __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") &&
-        __builtin_cpu_supports("avx512vl"))
-      core = "SkylakeX";
-    else if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
-      core = "Haswell";
-    if (!core) return;
-    setenv("OPENBLAS_CORETYPE", core, 0);
-    gotoblas_dynamic_quit();
-    gotoblas_dynamic_init();
-    unsetenv("OPENBLAS_CORETYPE");
-#endif
-  });
-}
-}  // namespace
-
 // CHOLMOD with 64-bit indices (a 1M-vertex bi-Laplacian factor approaches 2^31 entries).
 struct SparseSPDSolver::Impl {
   cholmod_common common;
@@ -76,7 +32,6 @@ struct SparseSPDSolver::Impl {
   double analyse_seconds = 0, numeric_seconds = 0;
 
   Impl() {
-    select_blas_kernels();
     cholmod_l_start(&common);
     common.supernodal = CHOLMOD_SUPERNODAL;
     common.print = 0;
@@ -185,9 +140,8 @@ struct SparseSPDSolver::Impl {
 };
 
 std::string SparseSPDSolver::backend() {
-  select_blas_kernels();
-  const char* blas = openblas_get_corename ? openblas_get_corename() : nullptr;
-  return blas ? std::string("CHOLMOD supernodal, OpenBLAS ") + blas + " kernels" : "CHOLMOD supernodal";
+  const std::string kernels = blas_kernels();
+  return kernels.empty() ? "CHOLMOD supernodal" : "CHOLMOD supernodal, OpenBLAS " + kernels + " kernels";
 }
 
 #else

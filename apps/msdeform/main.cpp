@@ -3,12 +3,14 @@
 #include <iostream>
 
 #include "apps/msdeform/commands.h"
+#include "msdeform/core/blas_kernels.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/memory.h"
 #include "msdeform/core/version.h"
 
 int main(int argc, char** argv) {
   msd::retain_freed_memory();
+  msd::select_blas_kernels();  // before any thread uses BLAS (core/blas_kernels.h)
   CLI::App app{"msdeform: multi-scale, detail-preserving deformation of triangle meshes"};
   app.require_subcommand(1);
   app.set_help_all_flag("--help-all", "Print help for all subcommands");

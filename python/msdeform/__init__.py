@@ -47,10 +47,10 @@ except ImportError as _e:  # pragma: no cover
 
 from ._msdeform import (  # noqa: E402
     ControlMesh, Deformer, DeformerTraits, DetailDistortion, Error, FrameReport, InvalidInput, MsdeformWarning,
-    ReferenceDistance, RigidityError, SolverError, Stats, TopologyError, UsageError, bounding_box_diagonal,
-    build_info, count_self_intersections, detail_distortion, distance_to_reference, handle_error,
+    ReferenceDistance, RigidityError, SolverError, Stats, TopologyError, UsageError, blas_kernels,
+    bounding_box_diagonal, build_info, count_self_intersections, detail_distortion, distance_to_reference, handle_error,
     library_version, method_options, read_def, read_dmat_groups, read_mesh, read_sel, read_soup,
-    rigidity_error, scene_names, select_box, select_halfspace, select_sphere, self_intersections,
+    rigidity_error, scene_names, select_blas_kernels, select_box, select_halfspace, select_sphere, self_intersections,
     vertex_normals, volume, volume_change, write_def, write_mesh, write_sel,
 )
 from ._helpers import (  # noqa: E402
@@ -84,4 +84,6 @@ __all__ = [
     "Error", "InvalidInput", "TopologyError", "SolverError", "UsageError", "MsdeformWarning",
     # versions
     "__version__", "library_version", "build_info",
+    # the process's BLAS kernels
+    "select_blas_kernels", "blas_kernels",
 ]

@@ -1,0 +1,68 @@
+#include "msdeform/core/blas_kernels.h"
+
+#include <dlfcn.h>
+#include <strings.h>
+
+#include <climits>
+#include <cstdlib>
+#include <cstring>
+#include <mutex>
+
+// OpenBLAS's kernel selection (DYNAMIC_ARCH builds, as Debian's) and the BLAS entry CHOLMOD calls. Weak:
+// without OpenBLAS they are null, and dgemm_ resolves (or not) as it does for CHOLMOD.
+extern "C" {
+char* openblas_get_corename(void) __attribute__((weak));
+void gotoblas_dynamic_init(void) __attribute__((weak));
+void gotoblas_dynamic_quit(void) __attribute__((weak));
+void dgemm_(void) __attribute__((weak));
+}
+
+namespace msd {
+namespace {
+
+// Whether the dgemm_ this process's CHOLMOD calls comes from OpenBLAS: Debian's alternatives may pair
+// OpenBLAS's LAPACK (which brings openblas_get_corename) with another BLAS. Debian's OpenBLAS libblas.so.3
+// forwards to libopenblas.so.0, so the test is the defining file's real path.
+bool openblas_is_the_blas() {
+  if (!openblas_get_corename || !dgemm_) return false;
+  Dl_info info;
+  if (!dladdr(reinterpret_cast<void*>(&dgemm_), &info) || !info.dli_fname) return false;
+  char path[PATH_MAX];
+  const char* file = realpath(info.dli_fname, path) ? path : info.dli_fname;
+  return std::strstr(file, "openblas") != nullptr;
+}
+
+}  // namespace
+
+std::string blas_kernels() {
+  if (!openblas_is_the_blas()) return "";
+  const char* name = openblas_get_corename();
+  return name ? name : "";
+}
+
+std::string select_blas_kernels() {
+  static std::mutex mutex;
+  const std::lock_guard<std::mutex> lock(mutex);
+#if defined(__x86_64__) || defined(__i386__)
+  if (openblas_is_the_blas() && gotoblas_dynamic_init && gotoblas_dynamic_quit && !std::getenv("OPENBLAS_CORETYPE") &&
+      strcasecmp(blas_kernels().c_str(), "prescott") == 0) {
+    __builtin_cpu_init();
+    const char* core = nullptr;
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&
+        __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") &&
+        __builtin_cpu_supports("avx512vl"))
+      core = "SkylakeX";
+    else if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+      core = "Haswell";
+    if (core) {
+      setenv("OPENBLAS_CORETYPE", core, 0);
+      gotoblas_dynamic_quit();
+      gotoblas_dynamic_init();
+      unsetenv("OPENBLAS_CORETYPE");
+    }
+  }
+#endif
+  return blas_kernels();
+}
+
+}  // namespace msd

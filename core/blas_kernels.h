@@ -1,0 +1,31 @@
+#pragma once
+//! \file The BLAS kernels behind CHOLMOD's supernodal factorisation, which spends most of its time in BLAS
+//! (dgemm, dsyrk, dtrsm).
+//!
+//! OpenBLAS before 0.3.25 (Debian 12 ships 0.3.21) chooses its kernels by CPU model number and, on a model
+//! it does not know (Sapphire and Emerald Rapids, recent client CPUs, many virtual machines), falls back to
+//! its Prescott (SSE3) kernels whatever the CPU supports (OpenBLAS issue #4267, fixed by PR #4268).
+//! Measured on a Xeon of model 207 with AVX-512: the 1M-vertex lift bi-Laplacian factors in 4.7-5.6 s with
+//! the SkylakeX kernels and in 8.2-8.4 s with Prescott's.
+
+#include <string>
+
+namespace msd {
+
+//! Where OpenBLAS (CHOLMOD's BLAS in this process) fell back to its Prescott kernels, reruns OpenBLAS's own
+//! kernel selection with the kernels the CPU's features allow: SkylakeX with AVX-512 (F, CD, BW, DQ, VL),
+//! Haswell with AVX2 and FMA (the path OPENBLAS_CORETYPE takes when the library loads). Does nothing when
+//! OPENBLAS_CORETYPE is set (the user's choice), when CHOLMOD's BLAS is not OpenBLAS, or on a CPU without
+//! AVX2. Returns blas_kernels() after the call.
+//!
+//! Process-wide: every user of that OpenBLAS (numpy too) gets the new kernels, whose results differ from
+//! the old ones by rounding. Call it at program start, before any thread uses BLAS: a BLAS call running
+//! in another thread while the kernels change can return garbage or hang. The msdeform tool and the
+//! benchmarks call it first thing; the library never calls it on its own. Safe to call more than once.
+std::string select_blas_kernels();
+
+//! The OpenBLAS kernels CHOLMOD's BLAS calls run on (e.g. "SkylakeX", "Prescott"), or "" when that BLAS
+//! is not OpenBLAS.
+std::string blas_kernels();
+
+}  // namespace msd

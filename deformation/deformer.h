@@ -77,7 +77,9 @@ class Deformer {
   //! Precomputes everything that depends only on the rest shape and the region. P: #V by 3 positions;
   //! F: #F by 3 triangles (surface methods need at least one; space methods take none or a soup);
   //! region: #V codes with at least one handle. Checks the arrays (finite, indices in range) and the
-  //! region (Region::validate, with F for surface methods).
+  //! region (Region::validate, with F for surface methods). Surface methods also check F as load_mesh does
+  //! (check_surface): a non-manifold edge or vertex, a non-orientable patch, a face repeating a vertex or
+  //! repeating another face is a TopologyError; faces wound against their neighbours give a prepare warning.
   //! \throw InvalidInput, TopologyError, SolverError naming what is wrong.
   void prepare(const Positions& P, const Faces& F, const Region& region);
   //! The same from a Mesh (converted once).

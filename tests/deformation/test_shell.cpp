@@ -243,3 +243,31 @@ TEST_CASE("shell: bad use gives clear errors", "[deformation][shell][bad-input]"
   Positions out;
   CHECK_THROWS_AS(shell.deform_to(Positions::Zero(3, 3), out), UsageError);
 }
+
+TEST_CASE("shell: face arrays load_mesh would refuse are refused by prepare, by name", "[deformation][shell]") {
+  // Arrays handed straight to prepare (the library, Python) get the checks the mesh loader makes.
+  const Scene scene = make_scene("lift", SceneOptions{});
+  const Eigen::Index nf = scene.F.rows();
+  ShellDeformer shell;
+  SECTION("a third face on an edge") {
+    Faces F(nf + 1, 3);
+    F << scene.F, scene.F(500, 0), scene.F(500, 1), 0;
+    CHECK_THROWS_WITH(shell.prepare(scene.P, F, scene.region), Contains("shared by 3 faces") && Contains("non-manifold"));
+    CHECK_THROWS_AS(shell.prepare(scene.P, F, scene.region), TopologyError);
+    CHECK_FALSE(shell.prepared());
+  }
+  SECTION("a face repeating a vertex, a face repeating another") {
+    Faces F(nf + 1, 3);
+    F << scene.F, scene.F(7, 0), scene.F(7, 0), scene.F(7, 1);
+    CHECK_THROWS_AS(shell.prepare(scene.P, F, scene.region), TopologyError);
+    F.row(nf) = scene.F.row(7);
+    CHECK_THROWS_AS(shell.prepare(scene.P, F, scene.region), TopologyError);
+  }
+  SECTION("a face wound against its neighbours: a warning, and the result as before") {
+    Faces F = scene.F;
+    std::swap(F(11, 1), F(11, 2));
+    shell.prepare(scene.P, F, scene.region);
+    REQUIRE(shell.prepare_warnings().size() == 1);
+    CHECK_THAT(shell.prepare_warnings()[0], Contains("1 face(s) wound against their neighbours"));
+  }
+}

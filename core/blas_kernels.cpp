@@ -44,8 +44,9 @@ std::string select_blas_kernels() {
   static std::mutex mutex;
   const std::lock_guard<std::mutex> lock(mutex);
 #if defined(__x86_64__) || defined(__i386__)
-  if (openblas_is_the_blas() && gotoblas_dynamic_init && gotoblas_dynamic_quit && !std::getenv("OPENBLAS_CORETYPE") &&
-      strcasecmp(blas_kernels().c_str(), "prescott") == 0) {
+  // blas_kernels() is "" unless OpenBLAS is the BLAS.
+  if (strcasecmp(blas_kernels().c_str(), "prescott") == 0 && gotoblas_dynamic_init && gotoblas_dynamic_quit &&
+      !std::getenv("OPENBLAS_CORETYPE")) {
     __builtin_cpu_init();
     const char* core = nullptr;
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&

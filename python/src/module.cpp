@@ -10,9 +10,9 @@
 #include <optional>
 
 #include "common.h"
-#include "msdeform/core/blas_kernels.h"
 #include "msdeform/analysis/metrics.h"
 #include "msdeform/analysis/self_intersections.h"
+#include "msdeform/core/blas_kernels.h"
 #include "msdeform/core/edit_case.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh.h"

@@ -1,7 +1,8 @@
 // One figure of the performance summary per process, so each case reports its own peak memory:
 //   bench_summary bandwidth                   streamed GB/s (triad a = b + s·c, both cores, 3 × 512 MB)
 //   bench_summary CASE SIZE                   CASE: factorisation, factorisation-libigl (the peer's solver on
-//                                             the same matrix), shell, normal, vectors, transfer
+//                                             the same matrix), shell, normal, vectors, transfer,
+//                                             normal-subdivision (the control-mesh base)
 // Prints one line "case size vertices prepare_s frame_ms frame_min_ms peak_MB bytes_per_vertex extra" that
 // bench/run gathers into the table of the README's performance section. The scene is the bumpy plane's
 // `lift` edit; the multi-scale cases use the low-pass base at detail scale 0.3 (bench_multiscale's setting).
@@ -69,7 +70,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (argc != 3) {
-    std::fprintf(stderr, "usage: bench_summary bandwidth | bench_summary factorisation|factorisation-libigl|shell|normal|vectors|transfer SIZE\n");
+    std::fprintf(stderr, "usage: bench_summary bandwidth | bench_summary factorisation|factorisation-libigl|shell|normal|vectors|transfer|normal-subdivision SIZE\n");
     return 2;
   }
   const std::string size = argv[2];
@@ -109,6 +110,15 @@ int main(int argc, char** argv) {
     msd::MultiscaleOptions o;
     o.encoding.kind = msd::encoding_kind(what);
     o.decomposition.low_pass.detail_scale = 0.3;
+    deformer = std::make_unique<msd::MultiscaleDeformer>(o);
+  } else if (what == "normal-subdivision") {
+    // The hierarchical base: the shell edits the plane's control mesh, a Loop stencil gives B' at full
+    // resolution, normal displacements carry the details. No factorisation at full resolution.
+    msd::MultiscaleOptions o;
+    o.encoding.kind = msd::EncodingKind::Normal;
+    o.decomposition.kind = msd::DecompositionKind::Subdivision;
+    o.decomposition.control =
+        std::make_shared<msd::ControlMesh>(msd::ControlMesh{scene.coarse_P, scene.coarse_F, scene.refinement});
     deformer = std::make_unique<msd::MultiscaleDeformer>(o);
   } else {
     std::fprintf(stderr, "bench_summary: unknown case '%s'\n", what.c_str());

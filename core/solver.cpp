@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <utility>
 
 #include "msdeform/core/blas_kernels.h"
 #include "msdeform/core/errors.h"
@@ -72,10 +73,12 @@ struct SparseSPDSolver::Impl {
     colp[n] = k;
     return S;
   }
-  void factor(const SparseMatrix& A) {
+  // `owned` (A itself, or null) is released once A is in CHOLMOD's format.
+  void factor(const SparseMatrix& A, SparseMatrix* owned = nullptr) {
     release();
     n = static_cast<int>(A.rows());
     cholmod_sparse* S = to_cholmod(A);
+    if (owned) SparseMatrix().swap(*owned);
     auto t0 = std::chrono::steady_clock::now();
     L = cholmod_l_analyze(S, &common);
     analyse_seconds = seconds_since(t0);
@@ -151,12 +154,16 @@ struct SparseSPDSolver::Impl {
   bool ok = false;
   int n = 0;
   double analyse_seconds = 0, numeric_seconds = 0;
-  void factor(const SparseMatrix& A) {
+  void factor(const SparseMatrix& A, SparseMatrix* owned = nullptr) {
     ok = false;
     n = static_cast<int>(A.rows());
     const auto t0 = std::chrono::steady_clock::now();
     ldlt.analyzePattern(A);
     analyse_seconds = seconds_since(t0);
+    struct Release {  // also when refactor() throws
+      SparseMatrix* m;
+      ~Release() { if (m) SparseMatrix().swap(*m); }
+    } release_owned{owned};
     refactor(A);
   }
   void refactor(const SparseMatrix& A) {
@@ -195,6 +202,13 @@ void SparseSPDSolver::factor(const SparseMatrix& A) {
   impl_->factor(A);
 }
 
+void SparseSPDSolver::factor(SparseMatrix&& A) {
+  if (A.rows() != A.cols())
+    throw SolverError("SparseSPDSolver: matrix is " + std::to_string(A.rows()) + "x" + std::to_string(A.cols()) + ", not square");
+  if (A.rows() == 0) throw SolverError("SparseSPDSolver: empty matrix");
+  impl_->factor(A, &A);
+}
+
 void SparseSPDSolver::refactor(const SparseMatrix& A) {
   if (!factored()) throw UsageError("SparseSPDSolver::refactor: call factor() first");
   if (A.rows() != impl_->n || A.cols() != impl_->n)
@@ -224,6 +238,16 @@ Eigen::MatrixXd SparseSPDSolver::solve(const Eigen::MatrixXd& B) const {
 }
 
 void ConstrainedQuadratic::prepare(const SparseMatrix& Q, const std::vector<int>& known) {
+  factor_unknowns(split(Q, known));
+}
+
+void ConstrainedQuadratic::prepare(SparseMatrix&& Q, const std::vector<int>& known) {
+  SparseMatrix Quu = split(Q, known);
+  SparseMatrix().swap(Q);
+  factor_unknowns(std::move(Quu));
+}
+
+SparseMatrix ConstrainedQuadratic::split(const SparseMatrix& Q, const std::vector<int>& known) {
   n_ = static_cast<int>(Q.rows());
   if (Q.rows() != Q.cols()) throw InvalidInput("ConstrainedQuadratic: Q is not square");
   std::vector<char> is_known(n_, 0);
@@ -237,9 +261,13 @@ void ConstrainedQuadratic::prepare(const SparseMatrix& Q, const std::vector<int>
   for (int i = 0; i < n_; ++i)
     if (!is_known[i]) unknown_.push_back(i);
   Quk_ = submatrix(Q, unknown_, known_);
+  return unknown_.empty() ? SparseMatrix() : submatrix(Q, unknown_, unknown_);
+}
+
+void ConstrainedQuadratic::factor_unknowns(SparseMatrix&& Quu) {
   if (unknown_.empty()) return;
   try {
-    solver_.factor(submatrix(Q, unknown_, unknown_));
+    solver_.factor(std::move(Quu));
   } catch (const SolverError& e) {
     if (e.index() < 0) throw;
     const int var = unknown_[e.index()];

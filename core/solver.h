@@ -23,6 +23,10 @@ class SparseSPDSolver {
   //! \throw SolverError if A is not square, not positive definite (index() = the failing column), or
   //! the factor does not fit in memory.
   void factor(const SparseMatrix& A);
+  //! The same, releasing A's storage once it is copied into the factorisation's own format (before the
+  //! numeric factorisation, the peak of memory): for callers that need A no longer. A is left empty, also
+  //! when this throws.
+  void factor(SparseMatrix&& A);
   //! Numeric refactorisation of a matrix with the same size and sparsity pattern as the last factor()
   //! (iterative methods whose values change each step): the ordering and symbolic analysis are reused.
   //! \throw UsageError without a previous factor() or for another size; SolverError as factor().
@@ -57,6 +61,9 @@ class ConstrainedQuadratic {
   //! \throw InvalidInput on a bad index; SolverError (index() = the variable) when Q on the unknowns is
   //! not positive definite, e.g. a group of unknowns is not coupled to any known variable.
   void prepare(const SparseMatrix& Q, const std::vector<int>& known);
+  //! The same, releasing Q's storage once its blocks are taken, before the factorisation (at 10M vertices
+  //! the bi-Laplacian Q alone holds 2.3 GB). Q is left empty, also when this throws.
+  void prepare(SparseMatrix&& Q, const std::vector<int>& known);
 
   //! known_values: |known| by k, rows in the order of `known`; linear: n by k or null. Writes all n
   //! rows of x (resized only when its shape differs). \throw UsageError before prepare or on shapes.
@@ -75,6 +82,10 @@ class ConstrainedQuadratic {
   SparseMatrix Quk_;
   SparseSPDSolver solver_;
   mutable Eigen::MatrixXd rhs_, xu_;
+  // prepare() in two steps: checks `known`, sets known_, unknown_ and Quk_, and returns Q(unknown, unknown);
+  // then factors that (releasing it).
+  SparseMatrix split(const SparseMatrix& Q, const std::vector<int>& known);
+  void factor_unknowns(SparseMatrix&& Quu);
 };
 
 }  // namespace msd

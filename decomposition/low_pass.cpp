@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/checks.h"
@@ -69,7 +70,7 @@ class LowPassSystem {
       if (solver_.factored())
         solver_.refactor(Auu);
       else
-        solver_.factor(Auu);
+        solver_.factor(std::move(Auu));  // released before the numeric factorisation
     } catch (const SolverError& e) {
       const long v = e.index() >= 0 ? unknown_[e.index()] : -1;
       throw SolverError(std::string(kWho) + ": the smoothing system is singular" +

@@ -2,6 +2,7 @@
 #include <strings.h>
 
 #include <cstdlib>
+#include <utility>
 
 #include <Eigen/Dense>
 
@@ -128,6 +129,35 @@ TEST_CASE("ConstrainedQuadratic equals a dense reference solve, several right-ha
   // Without a linear term, one column at a time gives the same as all at once.
   const Eigen::MatrixXd all = cq.solve(values);
   for (int c = 0; c < 3; ++c) CHECK((cq.solve(values.col(c)) - all.col(c)).norm() <= 1e-12 * all.norm());
+}
+
+TEST_CASE("factor and prepare from a matrix the caller gives up: same result, the matrix released", "[core][solver]") {
+  Positions P;
+  Faces F;
+  const SparseMatrix Q = test_matrix(P, F);
+  const std::vector<int> known = {0, 5, 9};
+  const Eigen::MatrixXd values = Eigen::MatrixXd::Random(3, 2);
+  ConstrainedQuadratic kept, released;
+  kept.prepare(Q, known);
+  SparseMatrix moved = Q;
+  released.prepare(std::move(moved), known);
+  CHECK(moved.nonZeros() == 0);
+  CHECK(moved.rows() == 0);
+  CHECK((released.solve(values) - kept.solve(values)).cwiseAbs().maxCoeff() == 0.0);
+
+  SparseMatrix A = Q;
+  A.diagonal().array() += 1.0;
+  const SparseMatrix A_copy = A;
+  SparseSPDSolver a, b;
+  a.factor(A_copy);
+  b.factor(std::move(A));
+  CHECK(A.nonZeros() == 0);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(A_copy.rows(), 2);
+  CHECK((b.solve(B) - a.solve(B)).cwiseAbs().maxCoeff() == 0.0);
+  // Released also when the factorisation fails.
+  SparseMatrix singular = Q;
+  CHECK_THROWS_AS(b.factor(std::move(singular)), SolverError);
+  CHECK(singular.nonZeros() == 0);
 }
 
 TEST_CASE("ConstrainedQuadratic: bad use gives clear errors", "[core][solver]") {

@@ -121,6 +121,9 @@ struct QueryState {
   double scale;  // of the normalised frame: Embree's radii are in its units
   float slack;   // covers the float rounding of Embree's vertex copy and of the query centre
   ClosestPoint best;
+  // Candidates farther than this are not taken: a triangle whose box meets the starting sphere need not
+  // itself lie within it. +∞ without a bound.
+  double limit2 = std::numeric_limits<double>::infinity();
 };
 
 // Called by Embree for every triangle whose bounds meet the current query sphere: exact double-precision
@@ -133,7 +136,7 @@ bool point_query_callback(RTCPointQueryFunctionArguments* args) {
   Vec3 bary;
   const Vec3 q = closest_point_on_triangle(state->p, P.row(F(f, 0)), P.row(F(f, 1)), P.row(F(f, 2)), bary);
   const double d2 = (state->p - q).squaredNorm();
-  if (!(d2 < state->best.squared_distance)) return false;
+  if (!(d2 < state->best.squared_distance) || d2 > state->limit2) return false;
   state->best.face = f;
   state->best.barycentric = bary;
   state->best.point = q;
@@ -224,7 +227,7 @@ void ClosestPointQuery::build(const Positions& P, const Faces& F) {
   impl_ = std::move(impl);
 }
 
-ClosestPoint ClosestPointQuery::query(const Vec3& p) const {
+ClosestPoint ClosestPointQuery::query(const Vec3& p, double max_distance) const {
   if (!impl_) throw UsageError("ClosestPointQuery::query: called before build()");
   QueryState state{&impl_->P, &impl_->F, p, impl_->frame.scale, 0.0f, ClosestPoint{}};
   const Vec3 local = impl_->frame.to_local(p);
@@ -236,10 +239,17 @@ ClosestPoint ClosestPointQuery::query(const Vec3& p) const {
   query.z = static_cast<float>(local.z());
   query.time = 0.0f;
   query.radius = std::numeric_limits<float>::infinity();
+  if (max_distance >= 0 && max_distance < std::numeric_limits<double>::infinity()) {
+    // The radius the callback would shrink the sphere to on meeting a point at max_distance, and the
+    // bound itself with room for its rounding. A bound below the closest distance leaves nothing found,
+    // and the exhaustive scan below answers.
+    query.radius = std::nextafter(static_cast<float>(max_distance / state.scale) + state.slack, FLT_MAX);
+    state.limit2 = max_distance * max_distance * (1 + 1e-9);
+  }
   RTCPointQueryContext context;
   rtcInitPointQueryContext(&context);
   rtcPointQuery(impl_->scene, &query, &context, point_query_callback, &state);
-  if (state.best.face < 0) {  // a query beyond float range of the frame: every triangle, exactly
+  if (state.best.face < 0) {  // beyond float range of the frame, or a max_distance too small: every triangle
     for (Eigen::Index f = 0; f < impl_->F.rows(); ++f) {
       Vec3 bary;
       const Vec3 q = closest_point_on_triangle(p, impl_->P.row(impl_->F(f, 0)), impl_->P.row(impl_->F(f, 1)),

@@ -113,6 +113,34 @@ TEST_CASE("ClosestPointQuery matches a brute-force scan over all faces", "[detai
   }
 }
 
+TEST_CASE("ClosestPointQuery with a distance bound finds what the unbounded search finds", "[detail][closest]") {
+  // The bound a detail encoding passes: the distance to the base vertex of the same index. Also a
+  // bound exactly at the closest distance, and one that breaks the contract (too small: the search
+  // becomes exhaustive, same answer). Points around a convex polyhedron's vertices often have that vertex
+  // as their closest point, which all its triangles share.
+  Positions P;
+  Faces F;
+  test::icosphere(3, P, F);
+  const ClosestPointQuery query(P, F);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (int v = 0; v < P.rows(); ++v) {
+    const Vec3 p = Vec3(P.row(v)) * (1 + noise(rng)) + Vec3(noise(rng), noise(rng), noise(rng));
+    const ClosestPoint free = query.query(p);
+    for (const double bound : {(p - Vec3(P.row(v))).norm(), std::sqrt(free.squared_distance),
+                               0.5 * std::sqrt(free.squared_distance)}) {
+      const ClosestPoint bounded = query.query(p, bound);
+      INFO("vertex " << v << ", bound " << bound);
+      REQUIRE(bounded.face >= 0);
+      CHECK(bounded.squared_distance == free.squared_distance);
+      CHECK((bounded.point - free.point).norm() <= 1e-15);
+      // A point on an edge or a corner belongs to several triangles (a tie): either may be returned.
+      if (bounded.face == free.face) CHECK(bounded.barycentric == free.barycentric);
+      else CHECK(bounded.barycentric.minCoeff() <= 1e-15);
+    }
+  }
+}
+
 TEST_CASE("ClosestPointQuery is exact where Embree's float copy is not", "[detail][closest]") {
   // Two nearly coincident parallel triangles 1e-9 apart, far from the origin: their float copies coincide,
   // the double-precision answer must still pick the nearer one and report its exact distance.

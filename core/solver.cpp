@@ -195,17 +195,21 @@ SparseSPDSolver::~SparseSPDSolver() = default;
 SparseSPDSolver::SparseSPDSolver(SparseSPDSolver&&) noexcept = default;
 SparseSPDSolver& SparseSPDSolver::operator=(SparseSPDSolver&&) noexcept = default;
 
-void SparseSPDSolver::factor(const SparseMatrix& A) {
+namespace {
+void check_factorable(const SparseMatrix& A) {
   if (A.rows() != A.cols())
     throw SolverError("SparseSPDSolver: matrix is " + std::to_string(A.rows()) + "x" + std::to_string(A.cols()) + ", not square");
   if (A.rows() == 0) throw SolverError("SparseSPDSolver: empty matrix");
+}
+}  // namespace
+
+void SparseSPDSolver::factor(const SparseMatrix& A) {
+  check_factorable(A);
   impl_->factor(A);
 }
 
 void SparseSPDSolver::factor(SparseMatrix&& A) {
-  if (A.rows() != A.cols())
-    throw SolverError("SparseSPDSolver: matrix is " + std::to_string(A.rows()) + "x" + std::to_string(A.cols()) + ", not square");
-  if (A.rows() == 0) throw SolverError("SparseSPDSolver: empty matrix");
+  check_factorable(A);
   impl_->factor(A, &A);
 }
 

@@ -25,7 +25,7 @@ class SparseSPDSolver {
   void factor(const SparseMatrix& A);
   //! The same, releasing A's storage once it is copied into the factorisation's own format (before the
   //! numeric factorisation, the peak of memory): for callers that need A no longer. A is left empty, also
-  //! when this throws.
+  //! when the factorisation fails.
   void factor(SparseMatrix&& A);
   //! Numeric refactorisation of a matrix with the same size and sparsity pattern as the last factor()
   //! (iterative methods whose values change each step): the ordering and symbolic analysis are reused.
@@ -62,7 +62,8 @@ class ConstrainedQuadratic {
   //! not positive definite, e.g. a group of unknowns is not coupled to any known variable.
   void prepare(const SparseMatrix& Q, const std::vector<int>& known);
   //! The same, releasing Q's storage once its blocks are taken, before the factorisation (at 10M vertices
-  //! the bi-Laplacian Q alone holds 2.3 GB). Q is left empty, also when this throws.
+  //! the bi-Laplacian Q alone holds 2.3 GB). Q is left empty once its blocks are taken, also when the
+  //! factorisation then fails.
   void prepare(SparseMatrix&& Q, const std::vector<int>& known);
 
   //! known_values: |known| by k, rows in the order of `known`; linear: n by k or null. Writes all n

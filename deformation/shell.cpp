@@ -27,7 +27,7 @@ void ShellDeformer::do_prepare(const Positions& P, const Faces& F, const Region&
   rest_ = P;
   const int nv = static_cast<int>(rest_.rows()), nh = region.num_handles();
   // (9.7) in symmetric form: −ks·L + kb·L² (L = M⁻¹W) multiplied by M is ks·Q₁ + kb·Q₂. The Laplacian and
-  // Q are released before the factorisation, the peak of memory (3.1 GB less at 10M vertices).
+  // Q are released before the factorisation, the peak of memory.
   SparseMatrix Q(nv, nv);
   {
     const LaplaceOperator lap = cotan_laplacian(rest_, F);

@@ -23,9 +23,9 @@ class SparseSPDSolver {
   //! \throw SolverError if A is not square, not positive definite (index() = the failing column), or
   //! the factor does not fit in memory.
   void factor(const SparseMatrix& A);
-  //! The same, releasing A's storage once it is copied into the factorisation's own format (before the
-  //! numeric factorisation, the peak of memory): for callers that need A no longer. A is left empty, also
-  //! when the factorisation fails.
+  //! The same, releasing A's storage once it is copied into the factorisation's own format (with CHOLMOD
+  //! before the numeric factorisation, the peak of memory; the Eigen fallback after it): for callers that
+  //! need A no longer. A square, non-empty A is left empty, also when the factorisation fails.
   void factor(SparseMatrix&& A);
   //! Numeric refactorisation of a matrix with the same size and sparsity pattern as the last factor()
   //! (iterative methods whose values change each step): the ordering and symbolic analysis are reused.

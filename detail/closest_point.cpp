@@ -241,15 +241,22 @@ ClosestPoint ClosestPointQuery::query(const Vec3& p, double max_distance) const 
   query.radius = std::numeric_limits<float>::infinity();
   if (max_distance >= 0 && max_distance < std::numeric_limits<double>::infinity()) {
     // The radius the callback would shrink the sphere to on meeting a point at max_distance, and the
-    // bound itself with room for its rounding. A bound below the closest distance leaves nothing found,
-    // and the exhaustive scan below answers.
+    // bound itself with room for its rounding.
     query.radius = std::nextafter(static_cast<float>(max_distance / state.scale) + state.slack, FLT_MAX);
     state.limit2 = max_distance * max_distance * (1 + 1e-9);
   }
   RTCPointQueryContext context;
   rtcInitPointQueryContext(&context);
   rtcPointQuery(impl_->scene, &query, &context, point_query_callback, &state);
-  if (state.best.face < 0) {  // beyond float range of the frame, or a max_distance too small: every triangle
+  if (state.best.face < 0 && state.limit2 < std::numeric_limits<double>::infinity()) {
+    // Nothing within the bound: it was too small, or the closest point's rounding put it a few ulps beyond
+    // (an obtuse corner, details of 1e-11). Unbounded, as without one.
+    state.limit2 = std::numeric_limits<double>::infinity();
+    query.radius = std::numeric_limits<float>::infinity();
+    rtcInitPointQueryContext(&context);
+    rtcPointQuery(impl_->scene, &query, &context, point_query_callback, &state);
+  }
+  if (state.best.face < 0) {  // a query beyond float range of the frame: every triangle, exactly
     for (Eigen::Index f = 0; f < impl_->F.rows(); ++f) {
       Vec3 bary;
       const Vec3 q = closest_point_on_triangle(p, impl_->P.row(impl_->F(f, 0)), impl_->P.row(impl_->F(f, 1)),

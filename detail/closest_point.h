@@ -49,7 +49,7 @@ class ClosestPointQuery {
   //! The exact closest point on the mesh to p (ties between triangles go to either).
   //! max_distance: a distance from p to some point of the mesh (a vertex a face uses, say), so at least the
   //! closest distance. The search starts with that sphere instead of an unbounded one, which prunes it; the
-  //! result is the same (a bound that is too small only makes the search exhaustive).
+  //! result is the same (a bound that is too small only makes it search again without one).
   //! \throw UsageError before build().
   ClosestPoint query(const Vec3& p, double max_distance = std::numeric_limits<double>::infinity()) const;
 

@@ -115,9 +115,9 @@ TEST_CASE("ClosestPointQuery matches a brute-force scan over all faces", "[detai
 
 TEST_CASE("ClosestPointQuery with a distance bound finds what the unbounded search finds", "[detail][closest]") {
   // The bound a detail encoding passes: the distance to the base vertex of the same index. Also a
-  // bound exactly at the closest distance, and one that breaks the contract (too small: the search
-  // becomes exhaustive, same answer). Points around a convex polyhedron's vertices often have that vertex
-  // as their closest point, which all its triangles share.
+  // bound exactly at the closest distance, and one that breaks the contract (too small: the query
+  // searches again without it, same answer). Points around a convex polyhedron's vertices often have
+  // that vertex as their closest point, which all its triangles share.
   Positions P;
   Faces F;
   test::icosphere(3, P, F);

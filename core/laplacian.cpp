@@ -33,6 +33,18 @@ Corner corner(const Positions& P, const Faces& F, Eigen::Index f) {
   return c;
 }
 
+// A rows by (start.size() − 1) matrix in compressed storage, sized for the entries its columns will hold:
+// start[c + 1] holds the count of column c on entry (start[0] = 0) and that column's first entry on return.
+// The caller writes each column's row indices (ascending) and values from start[c] on.
+SparseMatrix compressed_columns(Eigen::Index rows, std::vector<int>& start) {
+  const long nc = static_cast<long>(start.size()) - 1;
+  for (long c = 0; c < nc; ++c) start[c + 1] += start[c];
+  SparseMatrix S(rows, nc);
+  S.resizeNonZeros(start[nc]);
+  std::copy(start.begin(), start.end(), S.outerIndexPtr());
+  return S;
+}
+
 }  // namespace
 
 TriangleCotangents triangle_cotangents(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
@@ -163,10 +175,7 @@ SparseMatrix submatrix(const SparseMatrix& A, const std::vector<int>& rows, cons
     for (long c = begin; c < end; ++c)
       for (SparseMatrix::InnerIterator it(A, cols[c]); it; ++it) start[c + 1] += row_map[it.row()] >= 0;
   });
-  for (long c = 0; c < nc; ++c) start[c + 1] += start[c];
-  SparseMatrix S(static_cast<Eigen::Index>(rows.size()), nc);
-  S.resizeNonZeros(start[nc]);
-  std::copy(start.begin(), start.end(), S.outerIndexPtr());
+  SparseMatrix S = compressed_columns(static_cast<Eigen::Index>(rows.size()), start);
   int* index = S.innerIndexPtr();
   double* value = S.valuePtr();
   parallel_for_chunks(nc, [&](long begin, long end) {
@@ -235,10 +244,7 @@ SparseMatrix weighted_square(const SparseMatrix& W, const Eigen::VectorXd& w) {
         for (SparseMatrix::InnerIterator it(W, kt.row()); it; ++it)
           if (ws.seen[it.row()] != j) ws.seen[it.row()] = j, ++start[j + 1];
   }, 1024);
-  for (long j = 0; j < n; ++j) start[j + 1] += start[j];
-  SparseMatrix Q(n, n);
-  Q.resizeNonZeros(start[n]);
-  std::copy(start.begin(), start.end(), Q.outerIndexPtr());
+  SparseMatrix Q = compressed_columns(n, start);
   int* index = Q.innerIndexPtr();
   double* value = Q.valuePtr();
   parallel_for_chunks(n, [&](long begin, long end) {

@@ -13,6 +13,8 @@
 #include "bench/bench_common.h"
 #include "msdeform/core/memory.h"
 #include "msdeform/core/checks.h"
+#include "msdeform/core/parallel.h"
+#include "msdeform/core/region.h"
 #include "msdeform/core/scenes.h"
 #include "msdeform/deformation/shell.h"
 #include "msdeform/detail/fold_check.h"
@@ -38,7 +40,8 @@ void run(msd::Deformer& deformer, const msd::Scene& scene, const char* label) {
 
 // A multi-scale frame's stages one by one (what MultiscaleDeformer::deform runs, on the same
 // decomposition): the shell's basis product B', the encoding's reconstruction S' = B' ⊕ D (base normals or
-// frames, then interpolation), the fold count and the finite check of S'. Medians of 30 frames.
+// frames, then interpolation) of the vertices the edit does not place, the placement of the fixed and
+// handle vertices, the fold count and the finite check of S'. Medians of 30 frames.
 void breakdown(const msd::Scene& scene) {
   msd::DecompositionOptions options;
   options.low_pass.detail_scale = 0.3;
@@ -54,15 +57,28 @@ void breakdown(const msd::Scene& scene) {
     msd::EncodingOptions eo;
     eo.kind = msd::encoding_kind(name);
     const auto encoding = msd::make_encoding(eo);
+    encoding->set_placed_vertices(scene.region.constrained_vertices());  // as MultiscaleDeformer does
     encoding->encode(scene.P, scene.F, d.base, d.base_faces);
     const double t_encoding = median(time_frames(30, [&](int) { encoding->reconstruct(B, S); }));
+    // The fixed and handle vertices, placed where the edit puts them.
+    const std::vector<int>& placed = scene.region.constrained_vertices();
+    const double t_place = median(time_frames(30, [&](int) {
+      msd::parallel_for_chunks(static_cast<long>(placed.size()), [&](long begin, long end) {
+        for (long i = begin; i < end; ++i) {
+          const int v = placed[i], k = scene.region.handle_of(v);
+          const msd::Vec3 p = scene.P.row(v);
+          S.row(v) = k < 0 ? p : msd::transform_point(scene.transforms[k], p);
+        }
+      });
+    }));
     int folded = 0;
     const double t_folds = median(time_frames(30, [&](int) { folded = folds.count(S, B); }));
     long bad = 0;
     const double t_finite = median(time_frames(30, [&](int) { bad = msd::first_non_finite_row(S); }));
-    std::printf("%10ld %9s %9s breakdown [ms]: shell %.2f, reconstruction %.2f, fold count %.2f, finite check "
-                "%.2f (%d folded, first bad row %ld)\n",
-                long(scene.P.rows()), scene.name.c_str(), name, t_shell, t_encoding, t_folds, t_finite, folded, bad);
+    std::printf("%10ld %9s %9s breakdown [ms]: shell %.2f, reconstruction %.2f, placement %.2f, fold count %.2f, "
+                "finite check %.2f (%d folded, first bad row %ld)\n",
+                long(scene.P.rows()), scene.name.c_str(), name, t_shell, t_encoding, t_place, t_folds, t_finite,
+                folded, bad);
     std::fflush(stdout);
   }
 }

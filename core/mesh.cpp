@@ -126,12 +126,25 @@ void VertexNormals::compute(const Positions& P, RowPositions& N) const {
   compute_into(P, [=](long v, double x, double y, double z) { n[3 * v] = x, n[3 * v + 1] = y, n[3 * v + 2] = z; });
 }
 
+VertexNormals::VertexNormals(const Faces& F, int num_vertices, std::vector<int> vertices)
+    : VertexNormals(F, num_vertices) {
+  for (size_t k = 0; k < vertices.size(); ++k)
+    if (vertices[k] < 0 || vertices[k] >= num_vertices || (k > 0 && vertices[k] <= vertices[k - 1]))
+      throw InvalidInput("VertexNormals: vertex list entry " + std::to_string(k) + " (" +
+                         std::to_string(vertices[k]) + ") is out of range [0, " + std::to_string(num_vertices) +
+                         ") or not ascending");
+  vertices_ = std::move(vertices);
+  subset_ = true;
+}
+
 template <class Store>
 void VertexNormals::compute_into(const Positions& P, Store store) const {
-  const long nv = static_cast<long>(kind_.size());
+  const long count = subset_ ? static_cast<long>(vertices_.size()) : static_cast<long>(kind_.size());
+  const int* const subset = subset_ ? vertices_.data() : nullptr;
   const double *px = P.col(0).data(), *py = P.col(1).data(), *pz = P.col(2).data();
-  parallel_for_chunks(nv, [&](long b, long e) {
-    for (long v = b; v < e; ++v) {
+  parallel_for_chunks(count, [&](long b, long e) {
+    for (long k = b; k < e; ++k) {
+      const long v = subset ? subset[k] : k;
       const int* r = ring_.data() + offsets_[v];
       const int len = offsets_[v + 1] - offsets_[v];
       const double x = px[v], y = py[v], z = pz[v];

@@ -43,6 +43,10 @@ class VertexNormals {
  public:
   VertexNormals() = default;
   VertexNormals(const Faces& F, int num_vertices);
+  //! Normals of only `vertices` (ascending, each below num_vertices): compute() writes their rows and
+  //! leaves the other rows of N as they are, for frame loops that read a part of the normals (the detail
+  //! reconstruction around a region of interest). \throw InvalidInput on an index out of range.
+  VertexNormals(const Faces& F, int num_vertices, std::vector<int> vertices);
   //! Unit normals of positions P (#V by 3) into N (#V by 3, resized only when its size is wrong).
   void compute(const Positions& P, Positions& N) const;
   //! The same into a row-major buffer, for callers that then gather normals by vertex.
@@ -56,6 +60,8 @@ class VertexNormals {
   // its faces where the one-ring is not a fan.
   std::vector<int> offsets_, ring_;
   std::vector<unsigned char> kind_;
+  std::vector<int> vertices_;  // the vertices compute() writes, when not all (subset_)
+  bool subset_ = false;
 };
 
 //! The faces around each vertex: faces[offsets[v] .. offsets[v + 1]) are the rows of F containing v,

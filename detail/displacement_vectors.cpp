@@ -69,13 +69,18 @@ std::vector<int> VertexFrames::edge_order(int v) const {
 }
 
 template <class Visit>
-void VertexFrames::visit_frames(const Positions& P, Visit visit) const {
-  const long nv = num_vertices();
+void VertexFrames::visit_frames(const Positions& P, Visit visit, const std::vector<int>* vertices,
+                                const std::vector<int>* faces) const {
+  const long nv = vertices ? static_cast<long>(vertices->size()) : num_vertices();
+  const long nf = faces ? static_cast<long>(faces->size()) : static_cast<long>(F_.rows());
+  const int* const vertex_list = vertices ? vertices->data() : nullptr;
+  const int* const face_list = faces ? faces->data() : nullptr;
   const phong::Columns X(P);
   double* const face_normals = face_normals_.data();
   // Per face: the normal of length 2 · area (area weighting), or zero for a zero-area face, and its length.
-  parallel_for_chunks(F_.rows(), [&](long begin, long end) {
-    for (long f = begin; f < end; ++f) {
+  parallel_for_chunks(nf, [&](long begin, long end) {
+    for (long k = begin; k < end; ++k) {
+      const long f = face_list ? face_list[k] : k;
       const Vec3 p0 = X.row(F_(f, 0)), p1 = X.row(F_(f, 1)), p2 = X.row(F_(f, 2));
       const Vec3 n = (p1 - p0).cross(p2 - p0);
       const double longest2 =
@@ -88,7 +93,8 @@ void VertexFrames::visit_frames(const Positions& P, Visit visit) const {
     }
   });
   parallel_for_chunks(nv, [&](long begin, long end) {
-    for (long v = begin; v < end; ++v) {
+    for (long k = begin; k < end; ++k) {
+      const long v = vertex_list ? vertex_list[k] : k;
       Vec3 sum = Vec3::Zero();
       double weight = 0;
       for (int i = face_offsets_[v]; i < face_offsets_[v + 1]; ++i) {
@@ -159,7 +165,29 @@ void DisplacementVectors::encode(const Positions& S, const Faces& Fs, const Posi
   check_finite(S, where, "S");
   check_finite(B, where, "B");
   encoded_ = false;
-  frames_ = VertexFrames(Fb, static_cast<int>(B.rows()));
+  const int nv = static_cast<int>(B.rows());
+  std::vector<char> placed(nv, 0);
+  for (int v : placed_) {
+    if (v < 0 || v >= nv)
+      throw InvalidInput(std::string(where) + ": placed vertex " + std::to_string(v) + " is out of range [0, " +
+                         std::to_string(nv) + ")");
+    placed[v] = 1;
+  }
+  frames_ = VertexFrames(Fb, nv);
+  // The vertices a frame reconstructs (all but the placed ones) and the faces whose normals they read.
+  all_vertices_ = placed_.empty();
+  frame_vertices_.clear();
+  frame_faces_.clear();
+  if (!all_vertices_) {
+    std::vector<char> read(Fb.rows(), 0);
+    for (int v = 0; v < nv; ++v) {
+      if (placed[v]) continue;
+      frame_vertices_.push_back(v);
+      for (int i = frames_.face_offsets_[v]; i < frames_.face_offsets_[v + 1]; ++i) read[frames_.incident_faces_[i]] = 1;
+    }
+    for (Eigen::Index f = 0; f < Fb.rows(); ++f)
+      if (read[f]) frame_faces_.push_back(static_cast<int>(f));
+  }
   const Positions H = S - B;
   if (options_.frame == DisplacementFrame::Global) {
     coefficients_ = H;
@@ -189,11 +217,15 @@ void DisplacementVectors::reconstruct(const Positions& B_deformed, Positions& ou
     const phong::Columns b(B_deformed);
     // The frames of B' straight into (9.8): no per-frame #V by 3 frame arrays written and read back.
     // visit_frames runs its vertices in chunks on both cores; `finite` gathers their checks.
-    frames_.visit_frames(B_deformed, [&](long v, const Vec3& n, const Vec3& t1, const Vec3& t2) {
-      const Vec3 p = b.row(v) + (c[v] * n + c[nv + v] * t1 + c[2 * nv + v] * t2);
-      o[v] = p.x(), o[nv + v] = p.y(), o[2 * nv + v] = p.z();
-      if (!((p.x() - p.x()) + (p.y() - p.y()) + (p.z() - p.z()) == 0)) finite.store(false, std::memory_order_relaxed);
-    });
+    frames_.visit_frames(
+        B_deformed,
+        [&](long v, const Vec3& n, const Vec3& t1, const Vec3& t2) {
+          const Vec3 p = b.row(v) + (c[v] * n + c[nv + v] * t1 + c[2 * nv + v] * t2);
+          o[v] = p.x(), o[nv + v] = p.y(), o[2 * nv + v] = p.z();
+          if (!((p.x() - p.x()) + (p.y() - p.y()) + (p.z() - p.z()) == 0))
+            finite.store(false, std::memory_order_relaxed);
+        },
+        all_vertices_ ? nullptr : &frame_vertices_, all_vertices_ ? nullptr : &frame_faces_);
   } else {
     parallel_for_chunks(nv, [&](long begin, long end) {
       double check = 0;

@@ -40,9 +40,11 @@ class VertexFrames {
 
  private:
   friend class DisplacementVectors;  // reconstructs from each frame as it is computed
-  //! Calls visit(v, n, t1, t2) for every vertex, in parallel chunks (P has #V rows).
+  //! Calls visit(v, n, t1, t2) for every vertex, or only for `vertices` when given (ascending, with
+  //! `faces` the ascending list of their incident faces), in parallel chunks (P has #V rows).
   template <class Visit>
-  void visit_frames(const Positions& P, Visit visit) const;
+  void visit_frames(const Positions& P, Visit visit, const std::vector<int>* vertices = nullptr,
+                    const std::vector<int>* faces = nullptr) const;
 
   Faces F_;
   std::vector<int> face_offsets_{0}, incident_faces_;  // CSR: faces around each vertex
@@ -62,7 +64,8 @@ struct DisplacementVectorOptions {
 
 //! Displacement-vector detail encoding ("vectors"). S and B must share connectivity.
 //! reconstruct() is O(#V), parallel and allocation-free once `out` is sized; not safe to call
-//! concurrently on one object.
+//! concurrently on one object. With placed vertices (set_placed_vertices()) and local frames it computes
+//! the frames and rows of the other vertices only.
 class DisplacementVectors : public DetailEncoding {
  public:
   explicit DisplacementVectors(const DisplacementVectorOptions& options = {});
@@ -91,6 +94,9 @@ class DisplacementVectors : public DetailEncoding {
   VertexFrames frames_;
   bool encoded_ = false;
   Eigen::MatrixX3d coefficients_;
+  // With placed vertices: the vertices a frame reconstructs and the faces around them (local frames).
+  bool all_vertices_ = true;
+  std::vector<int> frame_vertices_, frame_faces_;
 };
 
 }  // namespace msd

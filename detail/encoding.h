@@ -33,6 +33,13 @@ class DetailEncoding {
   //! Call before encode(). \throw InvalidInput on an index out of range at encode().
   virtual void set_anchor_vertices(std::vector<int> vertices) { anchors_ = std::move(vertices); }
   const std::vector<int>& anchor_vertices() const { return anchors_; }
+  //! Vertices of S whose rows of S' the caller writes itself after every reconstruct() (the multi-scale
+  //! deformer places its fixed and handle vertices exactly). reconstruct() may then leave those rows as
+  //! they are and skip the work only they need: normal displacements and vectors do (their interpolation,
+  //! and the base normals or frames no other vertex reads); the others write every row. Empty by default.
+  //! Call before encode(). \throw InvalidInput on an index out of range at encode().
+  void set_placed_vertices(std::vector<int> vertices) { placed_ = std::move(vertices); }
+  const std::vector<int>& placed_vertices() const { return placed_; }
 
   //! S: #Vs by 3 detailed positions with faces Fs; B: #Vb by 3 base positions with faces Fb. Encodings
   //! that need S and B to share connectivity throw InvalidInput when they do not.
@@ -42,7 +49,7 @@ class DetailEncoding {
   virtual void reconstruct(const Positions& B_deformed, Positions& out) = 0;
 
  protected:
-  std::vector<int> anchors_;
+  std::vector<int> anchors_, placed_;
 };
 
 }  // namespace msd

@@ -169,6 +169,14 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
   const int nb = static_cast<int>(B.rows());
   const long ns = static_cast<long>(S.rows());
   num_base_vertices_ = -1;  // stays "not encoded" if anything below throws
+  // The vertices a frame reconstructs: all but those the caller places itself.
+  std::vector<char> placed(ns, 0);
+  for (int v : placed_) {
+    if (v < 0 || v >= ns)
+      throw InvalidInput(std::string(where) + ": placed vertex " + std::to_string(v) + " is out of range [0, " +
+                         std::to_string(ns) + ")");
+    placed[v] = 1;
+  }
   VertexNormals normals(Fb, nb);
   Positions N;
   normals.compute(B, N);
@@ -238,14 +246,24 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
 
   // Counting sort of the samples by base face (stable: vertex order within a face).
   std::vector<int> first(Fb.rows() + 1, 0);
-  for (long i = 0; i < ns; ++i) ++first[face[i] + 1];
+  for (long i = 0; i < ns; ++i) first[face[i] + 1] += !placed[i];
   for (Eigen::Index f = 0; f < Fb.rows(); ++f) first[f + 1] += first[f];
-  std::vector<Sample> samples(ns);
+  std::vector<Sample> samples(first.back());
   for (long i = 0; i < ns; ++i)
-    samples[first[face[i]]++] = Sample{{Fb(face[i], 0), Fb(face[i], 1), Fb(face[i], 2)},
-                                       static_cast<int>(i),
-                                       {barycentric(i, 0), barycentric(i, 1), barycentric(i, 2)},
-                                       height[i]};
+    if (!placed[i])
+      samples[first[face[i]]++] = Sample{{Fb(face[i], 0), Fb(face[i], 1), Fb(face[i], 2)},
+                                         static_cast<int>(i),
+                                         {barycentric(i, 0), barycentric(i, 1), barycentric(i, 2)},
+                                         height[i]};
+  if (!placed_.empty()) {  // B' normals at the corners of the samples' triangles only
+    std::vector<char> read(nb, 0);
+    for (const Sample& sample : samples)
+      for (int corner : sample.corner) read[corner] = 1;
+    std::vector<int> needed;
+    for (int v = 0; v < nb; ++v)
+      if (read[v]) needed.push_back(v);
+    normals = VertexNormals(Fb, nb, std::move(needed));
+  }
 
   samples_ = std::move(samples);
   base_faces_ = Fb;
@@ -287,7 +305,7 @@ void NormalDisplacements::reconstruct(const Positions& B_deformed, Positions& ou
   double* const oz = oy + ns;
   std::atomic<bool> finite{true};
   // Samples run in face order, so consecutive reads of B' stay close in memory.
-  parallel_for_chunks(ns, [&](long begin, long end) {
+  parallel_for_chunks(static_cast<long>(samples_.size()), [&](long begin, long end) {
     double check = 0;  // x − x is 0 for a finite x, NaN otherwise: one test per chunk
     for (long k = begin; k < end; ++k) {
       const Sample& s = samples_[k];

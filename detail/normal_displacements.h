@@ -36,6 +36,8 @@ struct NormalDisplacementOptions {
 //!
 //! reconstruct() recomputes B' vertex normals into a member buffer and interpolates: O(#Vs + #Vb),
 //! parallel, allocation-free once `out` has #Vs rows. Not safe to call concurrently on one object.
+//! With placed vertices (set_placed_vertices()) it interpolates only the others, and computes only the
+//! B' normals their base triangles read.
 class NormalDisplacements : public DetailEncoding {
  public:
   //! What encode() found.

@@ -47,6 +47,7 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
   }
   for (const std::string& w : base_deformer_->prepare_warnings()) prepare_warnings_.push_back(w);
   encoding_->set_anchor_vertices(region.constrained_vertices());
+  encoding_->set_placed_vertices(region.constrained_vertices());  // do_deform places them itself
   if (!d.base_is_input) {
     progress(name_ + ": encoding the details (" + encoding_->name() + ")");
     encoding_->encode(S, F, d.base, d.base_faces);  // D = S ⊖ B

@@ -8,6 +8,7 @@
 
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/checks.h"
+#include "msdeform/core/errors.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/scenes.h"
 #include "test_util.h"
@@ -59,6 +60,19 @@ TEST_CASE("VertexNormals equals the sum of area-weighted face normals", "[core][
   CHECK((N - ref).cwiseAbs().maxCoeff() <= 1e-9);
   CHECK(N.allFinite());
   CHECK((vertex_normals(P, F) - N).cwiseAbs().maxCoeff() == 0.0);
+
+  // Only a subset: the same rows bit for bit, the other rows untouched.
+  std::vector<int> subset;
+  for (int v = 1; v < P.rows(); v += 3) subset.push_back(v);
+  Positions part = Positions::Constant(P.rows(), 3, 7.0);
+  VertexNormals(F, static_cast<int>(P.rows()), subset).compute(P, part);
+  for (int v = 0; v < P.rows(); ++v) {
+    const bool in_subset = (v - 1) % 3 == 0 && v >= 1;
+    CHECK((part.row(v) - (in_subset ? Positions(N.row(v)) : Positions::Constant(1, 3, 7.0))).cwiseAbs().maxCoeff() ==
+          0.0);
+  }
+  CHECK_THROWS_AS(VertexNormals(F, static_cast<int>(P.rows()), {0, static_cast<int>(P.rows())}), InvalidInput);
+  CHECK_THROWS_AS(VertexNormals(F, static_cast<int>(P.rows()), {2, 1}), InvalidInput);
 }
 
 TEST_CASE("first_non_finite_row finds the first NaN or infinity in any column, across parallel chunks",

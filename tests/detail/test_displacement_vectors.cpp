@@ -217,3 +217,46 @@ TEST_CASE("displacement vectors: bad use and mismatched connectivity", "[detail]
   CHECK_THROWS_WITH(global.reconstruct(nan_b, out), Contains("vertex 6"));
   CHECK_THROWS_AS(VertexFrames(F, 9).compute(Positions(P.topRows(3)), out, out, out), UsageError);
 }
+
+TEST_CASE("displacement vectors: placed vertices are skipped, the others reconstructed bit for bit",
+          "[detail][vectors]") {
+  SceneOptions o;
+  o.resolution = 2000;
+  const Scene s = make_surface(SceneShape::Bar, o);
+  // A bent base B': the other rows must not depend on which vertices are placed.
+  Positions Bd = s.smooth;
+  for (Eigen::Index i = 0; i < Bd.rows(); ++i) Bd(i, 1) += 0.2 * Bd(i, 0) * Bd(i, 0);
+  std::vector<int> placed;
+  std::vector<char> is_placed(s.P.rows(), 0);
+  for (int v = 0; v < s.P.rows(); ++v)
+    if (s.P(v, 0) > 0.5 * s.P.col(0).maxCoeff() || v % 5 == 0) placed.push_back(v), is_placed[v] = 1;
+  REQUIRE(static_cast<Eigen::Index>(placed.size()) > s.P.rows() / 4);
+  for (DisplacementFrame frame : {DisplacementFrame::Local, DisplacementFrame::Global}) {
+    DisplacementVectors all({frame}), some({frame});
+    all.encode(s.P, s.F, s.smooth, s.F);
+    Positions expected;
+    all.reconstruct(Bd, expected);
+    some.set_placed_vertices(placed);
+    some.encode(s.P, s.F, s.smooth, s.F);
+    Positions out = Positions::Constant(s.P.rows(), 3, 7.0);
+    some.reconstruct(Bd, out);
+    int differ = 0;
+    for (int v = 0; v < s.P.rows(); ++v)
+      if (!is_placed[v]) differ += (out.row(v) - expected.row(v)).cwiseAbs().maxCoeff() != 0.0;
+    CHECK(differ == 0);
+  }
+  // Local frames leave the placed rows as they are.
+  DisplacementVectors local;
+  local.set_placed_vertices(placed);
+  local.encode(s.P, s.F, s.smooth, s.F);
+  Positions out = Positions::Constant(s.P.rows(), 3, 7.0);
+  local.reconstruct(Bd, out);
+  int touched = 0;
+  for (int v : placed) touched += (out.row(v).array() != 7.0).any();
+  CHECK(touched == 0);
+
+  DisplacementVectors bad;
+  bad.set_placed_vertices({-1});
+  CHECK_THROWS_WITH(bad.encode(s.P, s.F, s.smooth, s.F), Contains("placed vertex -1 is out of range"));
+  CHECK_FALSE(bad.encoded());
+}

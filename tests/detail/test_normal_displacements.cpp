@@ -347,3 +347,44 @@ TEST_CASE("normal displacements: reconstruct allocates nothing once out is sized
   CHECK(out.data() == data);
   CHECK(test::max_row_distance(out, s.P) <= 1e-9 * bounding_box_diagonal(s.P));
 }
+
+TEST_CASE("normal displacements: placed vertices are skipped, the others reconstructed bit for bit",
+          "[detail][normal]") {
+  SceneOptions o;
+  o.resolution = 2000;
+  const Scene s = make_surface(SceneShape::Plane, o);
+  const Positions B = umbrella_smooth(s.P, s.F, 20);
+  // A bent base B': the other rows must not depend on which vertices are placed.
+  Positions Bd = B;
+  for (Eigen::Index i = 0; i < Bd.rows(); ++i) Bd(i, 2) += 0.3 * Bd(i, 0) * Bd(i, 0) - 0.1 * Bd(i, 1);
+  NormalDisplacements all;
+  all.encode(s.P, s.F, B, s.F);
+  Positions expected;
+  all.reconstruct(Bd, expected);
+
+  std::vector<int> placed;
+  std::vector<char> is_placed(s.P.rows(), 0);
+  for (int v = 0; v < s.P.rows(); ++v)
+    if (s.P(v, 0) < 0.4 || v % 7 == 0) placed.push_back(v), is_placed[v] = 1;
+  REQUIRE(static_cast<Eigen::Index>(placed.size()) > s.P.rows() / 4);
+  NormalDisplacements some;
+  some.set_placed_vertices(placed);
+  some.encode(s.P, s.F, B, s.F);
+  CHECK((some.heights() - all.heights()).cwiseAbs().maxCoeff() == 0.0);  // the encoding itself is whole
+  Positions out = Positions::Constant(s.P.rows(), 3, 7.0);
+  some.reconstruct(Bd, out);
+  int differ = 0, touched = 0;
+  for (int v = 0; v < s.P.rows(); ++v) {
+    if (is_placed[v])
+      touched += (out.row(v).array() != 7.0).any();
+    else
+      differ += (out.row(v) - expected.row(v)).cwiseAbs().maxCoeff() != 0.0;
+  }
+  CHECK(differ == 0);
+  CHECK(touched == 0);
+
+  NormalDisplacements bad;
+  bad.set_placed_vertices({0, static_cast<int>(s.P.rows())});
+  CHECK_THROWS_WITH(bad.encode(s.P, s.F, B, s.F), Contains("placed vertex") && Contains("out of range"));
+  CHECK_FALSE(bad.encoded());
+}

@@ -166,13 +166,7 @@ void DisplacementVectors::encode(const Positions& S, const Faces& Fs, const Posi
   check_finite(B, where, "B");
   encoded_ = false;
   const int nv = static_cast<int>(B.rows());
-  std::vector<char> placed(nv, 0);
-  for (int v : placed_) {
-    if (v < 0 || v >= nv)
-      throw InvalidInput(std::string(where) + ": placed vertex " + std::to_string(v) + " is out of range [0, " +
-                         std::to_string(nv) + ")");
-    placed[v] = 1;
-  }
+  const std::vector<char> placed = placed_mask(nv, where);
   frames_ = VertexFrames(Fb, nv);
   // The vertices a frame reconstructs (all but the placed ones) and the faces whose normals they read.
   all_vertices_ = placed_.empty();

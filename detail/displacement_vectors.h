@@ -80,7 +80,7 @@ class DisplacementVectors : public DetailEncoding {
 
   //! S' (#V by 3) on the deformed base B' (#V by 3).
   //! \throw UsageError before encode() or when B' has the wrong number of rows; InvalidInput if the result
-  //! would be non-finite (a non-finite coordinate in B').
+  //! would be non-finite (a non-finite coordinate in B'; with placed vertices, in a row the others read).
   void reconstruct(const Positions& B_deformed, Positions& out) override;
 
   bool encoded() const { return encoded_; }

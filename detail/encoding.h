@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "msdeform/core/errors.h"
 #include "msdeform/core/types.h"
 
 namespace msd {
@@ -36,8 +37,9 @@ class DetailEncoding {
   //! Vertices of S whose rows of S' the caller writes itself after every reconstruct() (the multi-scale
   //! deformer places its fixed and handle vertices exactly). reconstruct() may then leave those rows as
   //! they are and skip the work only they need: normal displacements and vectors do (their interpolation,
-  //! and the base normals or frames no other vertex reads); the others write every row. Empty by default.
-  //! Call before encode(). \throw InvalidInput on an index out of range at encode().
+  //! and the base normals or frames no other vertex reads; they then check only the rows of B' they read)
+  //! and throw InvalidInput at encode() on an index out of range; the other encodings ignore the list and
+  //! write every row. Empty by default. Call before encode().
   void set_placed_vertices(std::vector<int> vertices) { placed_ = std::move(vertices); }
   const std::vector<int>& placed_vertices() const { return placed_; }
 
@@ -49,6 +51,19 @@ class DetailEncoding {
   virtual void reconstruct(const Positions& B_deformed, Positions& out) = 0;
 
  protected:
+  //! placed_vertices() as a mask over the num_vertices vertices of S.
+  //! \throw InvalidInput naming `where` on an index out of range.
+  std::vector<char> placed_mask(long num_vertices, const char* where) const {
+    std::vector<char> mask(num_vertices, 0);
+    for (int v : placed_) {
+      if (v < 0 || v >= num_vertices)
+        throw InvalidInput(std::string(where) + ": placed vertex " + std::to_string(v) + " is out of range [0, " +
+                           std::to_string(num_vertices) + ")");
+      mask[v] = 1;
+    }
+    return mask;
+  }
+
   std::vector<int> anchors_, placed_;
 };
 

@@ -169,14 +169,7 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
   const int nb = static_cast<int>(B.rows());
   const long ns = static_cast<long>(S.rows());
   num_base_vertices_ = -1;  // stays "not encoded" if anything below throws
-  // The vertices a frame reconstructs: all but those the caller places itself.
-  std::vector<char> placed(ns, 0);
-  for (int v : placed_) {
-    if (v < 0 || v >= ns)
-      throw InvalidInput(std::string(where) + ": placed vertex " + std::to_string(v) + " is out of range [0, " +
-                         std::to_string(ns) + ")");
-    placed[v] = 1;
-  }
+  const std::vector<char> placed = placed_mask(ns, where);  // a frame reconstructs the other vertices
   VertexNormals normals(Fb, nb);
   Positions N;
   normals.compute(B, N);

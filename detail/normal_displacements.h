@@ -60,7 +60,7 @@ class NormalDisplacements : public DetailEncoding {
 
   //! S' (#Vs by 3) on the deformed base B' (#Vb by 3, connectivity Fb of encode()).
   //! \throw UsageError before encode() or when B' does not have #Vb rows; InvalidInput if B' has a
-  //! non-finite coordinate.
+  //! non-finite coordinate (with placed vertices: in a row the other vertices read).
   void reconstruct(const Positions& B_deformed, Positions& out) override;
 
   //! Base points b'(α, β, γ) (#Vs by 3) on a base with the encoded connectivity (B itself or a deformed B').

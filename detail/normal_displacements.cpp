@@ -258,6 +258,10 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
     normals = VertexNormals(Fb, nb, std::move(needed));
   }
 
+  // The warning leaves out placed vertices: they are where the caller puts them, whatever their encoding.
+  reconstructed_fallbacks_.clear();
+  for (int v : report.fallback_vertices)
+    if (!placed[v]) reconstructed_fallbacks_.push_back(v);
   samples_ = std::move(samples);
   base_faces_ = Fb;
   normals_ = std::move(normals);
@@ -325,15 +329,15 @@ Eigen::VectorXd normal_displacement_heights(const Positions& S, const Positions&
 }
 
 std::vector<std::string> NormalDisplacements::encode_warnings() const {
-  if (report_.fallback == 0) return {};
+  const std::vector<int>& fallback = reconstructed_fallbacks_;
+  if (fallback.empty()) return {};
   std::string ids;
-  for (size_t k = 0; k < report_.fallback_vertices.size() && k < 5; ++k)
-    ids += (k ? ", " : "") + std::to_string(report_.fallback_vertices[k]);
-  return {"normal displacements: " + std::to_string(report_.fallback) + " of " +
+  for (size_t k = 0; k < fallback.size() && k < 5; ++k) ids += (k ? ", " : "") + std::to_string(fallback[k]);
+  return {"normal displacements: " + std::to_string(fallback.size()) + " of " +
           std::to_string(report_.fallback + report_.converged) +
           " vertices found no base point along the base's normals (Newton did not converge) and were encoded "
           "from their closest point on B, so the details there are not reproduced exactly (vertices " + ids +
-          (report_.fallback > 5 ? ", ..." : "") + "); a smoother base (a larger detail scale) usually removes them"};
+          (fallback.size() > 5 ? ", ..." : "") + "); a smoother base (a larger detail scale) usually removes them"};
 }
 
 }  // namespace msd

@@ -70,7 +70,8 @@ class NormalDisplacements : public DetailEncoding {
   bool encoded() const { return num_base_vertices_ >= 0; }
   const NormalDisplacementOptions& options() const { return options_; }
   const EncodeReport& report() const { return report_; }
-  //! One sentence when some vertices fell back to their closest point (count and the first ids).
+  //! One sentence when some vertices fell back to their closest point (count and the first ids), placed
+  //! vertices left out: their position is the caller's.
   std::vector<std::string> encode_warnings() const override;
   //! #Vs face indices into Fb: the base triangle of each vertex of S.
   const Eigen::VectorXi& base_faces() const { return face_; }
@@ -96,6 +97,7 @@ class NormalDisplacements : public DetailEncoding {
   Eigen::MatrixX3d barycentric_;
   Eigen::VectorXd height_;
   EncodeReport report_;
+  std::vector<int> reconstructed_fallbacks_;  // report_.fallback_vertices that are not placed
 };
 
 //! One-shot: the signed normal-displacement heights (#Vs) of S over the base (B, Fb), e.g. to measure

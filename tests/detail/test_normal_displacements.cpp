@@ -291,6 +291,21 @@ TEST_CASE("normal displacements: fallback to the closest point is reported and f
   CHECK(out.allFinite());
   // The dropped tangential part is small here: the result stays near S.
   CHECK(test::max_row_distance(out, S) <= 0.1);
+  REQUIRE(nd.encode_warnings().size() == 1);
+  CHECK_THAT(nd.encode_warnings()[0], Contains(std::to_string(report.fallback) + " of " + std::to_string(S.rows())));
+  // The warning leaves out vertices the caller places: only the fallbacks it still reconstructs.
+  NormalDisplacements placed(options);
+  std::vector<int> all_but_one(report.fallback_vertices.begin() + 1, report.fallback_vertices.end());
+  placed.set_placed_vertices(all_but_one);
+  placed.encode(S, Fs, B, Fb);
+  REQUIRE(placed.encode_warnings().size() == 1);
+  CHECK_THAT(placed.encode_warnings()[0],
+             Contains("1 of " + std::to_string(S.rows())) &&
+                 Contains("(vertices " + std::to_string(report.fallback_vertices[0]) + ")"));
+  placed.set_placed_vertices(report.fallback_vertices);
+  placed.encode(S, Fs, B, Fb);
+  CHECK(placed.encode_warnings().empty());
+  CHECK(placed.report().fallback == report.fallback);  // the report still counts every vertex
 
   // With the default options everything converges and the reconstruction is exact.
   NormalDisplacements full;

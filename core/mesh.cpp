@@ -126,11 +126,11 @@ void VertexNormals::compute(const Positions& P, RowPositions& N) const {
   compute_into(P, [=](long v, double x, double y, double z) { n[3 * v] = x, n[3 * v + 1] = y, n[3 * v + 2] = z; });
 }
 
-VertexNormals::VertexNormals(const Faces& F, int num_vertices, std::vector<int> vertices)
-    : VertexNormals(F, num_vertices) {
+void VertexNormals::restrict_to(std::vector<int> vertices) {
+  const int num_vertices = static_cast<int>(kind_.size());
   for (size_t k = 0; k < vertices.size(); ++k)
     if (vertices[k] < 0 || vertices[k] >= num_vertices || (k > 0 && vertices[k] <= vertices[k - 1]))
-      throw InvalidInput("VertexNormals: vertex list entry " + std::to_string(k) + " (" +
+      throw InvalidInput("VertexNormals::restrict_to: vertex list entry " + std::to_string(k) + " (" +
                          std::to_string(vertices[k]) + ") is out of range [0, " + std::to_string(num_vertices) +
                          ") or not ascending");
   vertices_ = std::move(vertices);

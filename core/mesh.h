@@ -43,10 +43,11 @@ class VertexNormals {
  public:
   VertexNormals() = default;
   VertexNormals(const Faces& F, int num_vertices);
-  //! Normals of only `vertices` (ascending, each below num_vertices): compute() writes their rows and
-  //! leaves the other rows of N as they are, for frame loops that read a part of the normals (the detail
-  //! reconstruction around a region of interest). \throw InvalidInput on an index out of range.
-  VertexNormals(const Faces& F, int num_vertices, std::vector<int> vertices);
+  //! From now on the normals of only `vertices` (ascending, each below #V): compute() writes their rows
+  //! and leaves the other rows of N as they are, for frame loops that read a part of the normals (the
+  //! detail reconstruction around a region of interest). \throw InvalidInput on an index out of range or
+  //! out of order (and the normals stay as they were).
+  void restrict_to(std::vector<int> vertices);
   //! Unit normals of positions P (#V by 3) into N (#V by 3, resized only when its size is wrong).
   void compute(const Positions& P, Positions& N) const;
   //! The same into a row-major buffer, for callers that then gather normals by vertex.

@@ -255,7 +255,7 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
     std::vector<int> needed;
     for (int v = 0; v < nb; ++v)
       if (read[v]) needed.push_back(v);
-    normals = VertexNormals(Fb, nb, std::move(needed));
+    normals.restrict_to(std::move(needed));
   }
 
   // The warning leaves out placed vertices: they are where the caller puts them, whatever their encoding.

@@ -11,6 +11,8 @@
 
 #ifdef MSD_HAVE_CHOLMOD
 #include <cholmod.h>
+
+#include "msdeform/core/supernodal_substitution.h"
 #else
 #include <Eigen/SparseCholesky>
 #endif
@@ -29,6 +31,7 @@ struct SparseSPDSolver::Impl {
   cholmod_common common;
   cholmod_factor* L = nullptr;
   mutable cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace, reused
+  SupernodalSubstitution substitution;  // solves up to 4 right-hand sides, on both cores
   int n = 0;
   double analyse_seconds = 0, numeric_seconds = 0;
 
@@ -49,6 +52,7 @@ struct SparseSPDSolver::Impl {
     cholmod_l_finish(&common);
   }
   void release() {
+    substitution.clear();
     if (L) cholmod_l_free_factor(&L, &common);
     for (cholmod_dense** d : {&X, &Y, &E})
       if (*d) cholmod_l_free_dense(d, &common);
@@ -107,8 +111,14 @@ struct SparseSPDSolver::Impl {
                                                         : "SparseSPDSolver: factorisation failed (CHOLMOD status " +
                                                               std::to_string(status) + ")");
     }
+    if (!substitution.planned()) substitution.plan(L);  // a refactorisation keeps the structure
   }
   void solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& Xout) const {
+    if (substitution.planned() && B.cols() >= 1 && B.cols() <= SupernodalSubstitution::kMaxColumns) {
+      if (Xout.rows() != B.rows() || Xout.cols() != B.cols()) Xout.resize(B.rows(), B.cols());
+      substitution.solve(B.data(), Xout.data(), static_cast<int>(B.cols()));  // reads all of B before writing
+      return;
+    }
     cholmod_dense b;
     std::memset(&b, 0, sizeof(b));
     b.nrow = B.rows();

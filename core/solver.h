@@ -11,7 +11,9 @@ namespace msd {
 
 //! Factors a sparse SPD matrix once and solves for any number of right-hand sides. Uses CHOLMOD's
 //! supernodal Cholesky when msdeform was built with SuiteSparse, else Eigen's SimplicialLDLT; the class
-//! hides which. solve() reuses internal workspace, so it is not safe to call concurrently on one object.
+//! hides which. With CHOLMOD, up to 4 right-hand sides (a mesh's x, y, z) are solved by
+//! SupernodalSubstitution on both cores, more by CHOLMOD's solve. solve() reuses internal workspace, so
+//! it is not safe to call concurrently on one object.
 class SparseSPDSolver {
  public:
   SparseSPDSolver();
@@ -34,7 +36,7 @@ class SparseSPDSolver {
   bool factored() const;
   int size() const;
 
-  //! Solves A X = B for B n by k; X is resized only when its shape differs.
+  //! Solves A X = B for B n by k; X is resized only when its shape differs, and may be B itself.
   //! \throw UsageError before factor() or on a row-count mismatch.
   void solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X) const;
   Eigen::MatrixXd solve(const Eigen::MatrixXd& B) const;

@@ -12,6 +12,12 @@
 #include "msdeform/core/solver.h"
 #include "test_util.h"
 
+#ifdef MSD_HAVE_CHOLMOD
+#include <cholmod.h>
+
+#include "msdeform/core/supernodal_substitution.h"
+#endif
+
 using namespace msd;
 
 namespace {
@@ -20,6 +26,13 @@ SparseMatrix test_matrix(Positions& P, Faces& F) {
   test::icosphere(2, P, F);
   const LaplaceOperator lap = cotan_laplacian(P, F);
   return SparseMatrix(-lap.W + lap.W * lap.mass.cwiseInverse().asDiagonal() * lap.W);
+}
+SparseMatrix test_matrix_spd() {
+  Positions P;
+  Faces F;
+  SparseMatrix A = test_matrix(P, F);
+  A.diagonal().array() += 1.0;
+  return A;
 }
 }  // namespace
 
@@ -63,6 +76,97 @@ TEST_CASE("OpenBLAS behind CHOLMOD uses the kernels the CPU allows, not its Pres
   CHECK((A * solver.solve(B) - B).norm() <= 1e-10 * B.norm());
   CHECK(SparseSPDSolver::backend() == "CHOLMOD supernodal, OpenBLAS " + kernels + " kernels");
 }
+
+namespace {
+// The cotan Laplacian of a jittered n x n grid on its interior vertices (the boundary fixed): the matrix of
+// a Poisson solve on a mesh, with many small supernodes.
+SparseMatrix grid_laplacian(int n) {
+  Positions P;
+  Faces F;
+  std::vector<bool> interior;
+  test::jittered_grid(n, 0.3, P, F, interior);
+  std::vector<int> inner;
+  for (int v = 0; v < P.rows(); ++v)
+    if (interior[v]) inner.push_back(v);
+  return submatrix(SparseMatrix(-cotan_laplacian(P, F).W), inner, inner);
+}
+}  // namespace
+
+TEST_CASE("SparseSPDSolver: 1 to 4 right-hand sides equal the same columns solved among 5, also in place",
+          "[core][solver]") {
+  // Up to 4 columns take the solver's own substitution (two threads), 5 take CHOLMOD's solve.
+  for (const SparseMatrix& A : {grid_laplacian(120), SparseMatrix(test_matrix_spd())}) {
+    SparseSPDSolver solver;
+    solver.factor(A);
+    const Eigen::MatrixXd B = Eigen::MatrixXd::Random(A.rows(), 5);
+    const Eigen::MatrixXd all = solver.solve(B);
+    REQUIRE((A * all - B).norm() <= 1e-10 * B.norm());
+    for (int k = 1; k <= 4; ++k) {
+      INFO(k << " columns, " << A.rows() << " unknowns");
+      const Eigen::MatrixXd X = solver.solve(B.leftCols(k));
+      CHECK((X - all.leftCols(k)).cwiseAbs().maxCoeff() <= 1e-12 * all.cwiseAbs().maxCoeff());
+      Eigen::MatrixXd in_place = B.leftCols(k);
+      solver.solve(in_place, in_place);
+      CHECK((in_place - X).cwiseAbs().maxCoeff() == 0.0);
+    }
+  }
+  // Matrices without a tree to split: a diagonal one (every column its own root) and a 1 x 1.
+  SparseMatrix D(50, 50);
+  for (int i = 0; i < 50; ++i) D.insert(i, i) = 1.0 + i;
+  SparseSPDSolver diagonal;
+  diagonal.factor(D);
+  const Eigen::MatrixXd b = Eigen::MatrixXd::Random(50, 3);
+  const Eigen::MatrixXd x = diagonal.solve(b);
+  for (int i = 0; i < 50; ++i) CHECK((x.row(i) * (1.0 + i) - b.row(i)).norm() <= 1e-15 * b.row(i).norm());
+  SparseMatrix one(1, 1);
+  one.insert(0, 0) = 4.0;
+  SparseSPDSolver single;
+  single.factor(one);
+  CHECK((single.solve(Eigen::MatrixXd::Constant(1, 2, 2.0)).array() == 0.5).all());
+}
+
+#ifdef MSD_HAVE_CHOLMOD
+TEST_CASE("SupernodalSubstitution equals CHOLMOD's solve, splits the tree, refuses other factors", "[core][solver]") {
+  const SparseMatrix A = grid_laplacian(150);
+  cholmod_common common;
+  cholmod_l_start(&common);
+  cholmod_sparse* S = cholmod_l_allocate_sparse(A.rows(), A.cols(), A.nonZeros(), true, true, -1, CHOLMOD_REAL, &common);
+  const SparseMatrix lower = A.triangularView<Eigen::Lower>();  // column-major, as CHOLMOD stores it
+  for (Eigen::Index j = 0; j <= A.cols(); ++j) static_cast<SuiteSparse_long*>(S->p)[j] = lower.outerIndexPtr()[j];
+  for (Eigen::Index k = 0; k < lower.nonZeros(); ++k) {
+    static_cast<SuiteSparse_long*>(S->i)[k] = lower.innerIndexPtr()[k];
+    static_cast<double*>(S->x)[k] = lower.valuePtr()[k];
+  }
+  common.supernodal = CHOLMOD_SUPERNODAL;
+  cholmod_factor* L = cholmod_l_analyze(S, &common);
+  REQUIRE(cholmod_l_factorize(S, L, &common));
+  SupernodalSubstitution substitution;
+  REQUIRE(substitution.plan(L));
+  CHECK(substitution.parallel_share() > 0.5);  // two subtrees hold most of the work
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(A.rows(), 4);
+  cholmod_dense b;
+  b.nrow = B.rows(), b.ncol = B.cols(), b.nzmax = B.size(), b.d = B.rows();
+  b.x = const_cast<double*>(B.data()), b.z = nullptr, b.xtype = CHOLMOD_REAL, b.dtype = CHOLMOD_DOUBLE;
+  cholmod_dense* reference = cholmod_l_solve(CHOLMOD_A, L, &b, &common);
+  const Eigen::Map<const Eigen::MatrixXd> expected(static_cast<const double*>(reference->x), B.rows(), B.cols());
+  Eigen::MatrixXd X(B.rows(), B.cols());
+  substitution.solve(B.data(), X.data(), 4);
+  CHECK((X - expected).cwiseAbs().maxCoeff() <= 1e-12 * expected.cwiseAbs().maxCoeff());
+  Eigen::MatrixXd x1(B.rows(), 1);
+  substitution.solve(B.data(), x1.data(), 1);
+  CHECK((x1.col(0) - expected.col(0)).cwiseAbs().maxCoeff() <= 1e-12 * expected.cwiseAbs().maxCoeff());
+  // A simplicial factor is not planned (CHOLMOD's solve serves it).
+  cholmod_factor* simplicial = cholmod_l_copy_factor(L, &common);
+  REQUIRE(cholmod_l_change_factor(CHOLMOD_REAL, true, false, true, true, simplicial, &common));
+  CHECK_FALSE(substitution.plan(simplicial));
+  CHECK_FALSE(substitution.planned());
+  cholmod_l_free_factor(&simplicial, &common);
+  cholmod_l_free_dense(&reference, &common);
+  cholmod_l_free_factor(&L, &common);
+  cholmod_l_free_sparse(&S, &common);
+  cholmod_l_finish(&common);
+}
+#endif
 
 TEST_CASE("SparseSPDSolver::refactor reuses the analysis for new values on the same pattern", "[core][solver]") {
   Positions P;

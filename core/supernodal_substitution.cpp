@@ -1,0 +1,260 @@
+#include "msdeform/core/supernodal_substitution.h"
+
+#include <algorithm>
+#include <climits>
+
+#include <cholmod.h>
+#include <tbb/parallel_invoke.h>
+
+#include "msdeform/core/parallel.h"
+
+namespace msd {
+namespace {
+
+using Int = SuiteSparse_long;
+// The right-hand sides of one row, padded to 4; aligned(8): rows sit in plain double arrays.
+typedef double Row __attribute__((vector_size(32), aligned(8)));
+
+// AVX2 and FMA where the CPU has them, chosen when the library loads; SSE2 elsewhere.
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__ELF__) && !defined(__AVX2__)
+#define MSD_VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define MSD_VECTOR_CLONES
+#endif
+
+// Supernode s of L: columns j0 .. j0 + ncol - 1, its first ncol rows are those columns, the other m rows
+// (below the diagonal block) are `below`; values column-major with leading dimension ncol + m.
+struct Supernode {
+  long j0, ncol, m;
+  const Int* below;
+  const double* x;
+  Supernode(const cholmod_factor* L, long s) {
+    const Int *super = static_cast<const Int*>(L->super), *pi = static_cast<const Int*>(L->pi);
+    j0 = super[s];
+    ncol = super[s + 1] - j0;
+    m = pi[s + 1] - pi[s] - ncol;
+    below = static_cast<const Int*>(L->s) + pi[s] + ncol;
+    x = static_cast<const double*>(L->x) + static_cast<const Int*>(L->px)[s];
+  }
+};
+
+// Forward substitution through one supernode: solves its diagonal block for its rows of Y, then subtracts
+// the block below times them from the rows below (through top_update where top_slot sends a row there).
+MSD_VECTOR_CLONES void forward(const Supernode& S, Row* __restrict Y, Row* __restrict W, const int* top_slot,
+                               Row* __restrict top_update) {
+  const long ld = S.ncol + S.m, m = S.m;
+  Row* __restrict y = Y + S.j0;
+  for (long j = 0; j < S.ncol; ++j) {
+    const double* __restrict a = S.x + j * ld;
+    const Row x = y[j] / a[j];
+    y[j] = x;
+    for (long i = j + 1; i < S.ncol; ++i) y[i] -= a[i] * x;
+  }
+  if (m == 0) return;
+  for (long i = 0; i < m; ++i) W[i] = Row{0, 0, 0, 0};
+  long j = 0;
+  for (; j + 4 <= S.ncol; j += 4) {  // four columns per pass over W
+    const double* __restrict a0 = S.x + j * ld + S.ncol;
+    const double *__restrict a1 = a0 + ld, *__restrict a2 = a1 + ld, *__restrict a3 = a2 + ld;
+    const Row x0 = y[j], x1 = y[j + 1], x2 = y[j + 2], x3 = y[j + 3];
+    for (long i = 0; i < m; ++i) W[i] += (a0[i] * x0 + a1[i] * x1) + (a2[i] * x2 + a3[i] * x3);
+  }
+  for (; j < S.ncol; ++j) {
+    const double* __restrict a = S.x + j * ld + S.ncol;
+    const Row x = y[j];
+    for (long i = 0; i < m; ++i) W[i] += a[i] * x;
+  }
+  if (!top_slot) {
+    for (long i = 0; i < m; ++i) Y[S.below[i]] -= W[i];
+    return;
+  }
+  for (long i = 0; i < m; ++i) {
+    const long r = S.below[i];
+    const int t = top_slot[r];
+    if (t < 0)
+      Y[r] -= W[i];
+    else
+      top_update[t] += W[i];
+  }
+}
+
+// Back substitution through one supernode: subtracts the transposed block below times the (solved) rows
+// below from its rows, then solves the transposed diagonal block.
+MSD_VECTOR_CLONES void back(const Supernode& S, Row* __restrict Y, Row* __restrict W) {
+  const long ld = S.ncol + S.m, m = S.m;
+  Row* __restrict y = Y + S.j0;
+  if (m > 0) {
+    for (long i = 0; i < m; ++i) W[i] = Y[S.below[i]];
+    long j = 0;
+    for (; j + 4 <= S.ncol; j += 4) {  // four columns per pass over W, two partial sums each
+      const double* __restrict a0 = S.x + j * ld + S.ncol;
+      const double *__restrict a1 = a0 + ld, *__restrict a2 = a1 + ld, *__restrict a3 = a2 + ld;
+      Row s0{0, 0, 0, 0}, s1 = s0, s2 = s0, s3 = s0, t0 = s0, t1 = s0, t2 = s0, t3 = s0;
+      long i = 0;
+      for (; i + 2 <= m; i += 2) {
+        const Row w = W[i], v = W[i + 1];
+        s0 += a0[i] * w, s1 += a1[i] * w, s2 += a2[i] * w, s3 += a3[i] * w;
+        t0 += a0[i + 1] * v, t1 += a1[i + 1] * v, t2 += a2[i + 1] * v, t3 += a3[i + 1] * v;
+      }
+      if (i < m) s0 += a0[i] * W[i], s1 += a1[i] * W[i], s2 += a2[i] * W[i], s3 += a3[i] * W[i];
+      y[j] -= s0 + t0, y[j + 1] -= s1 + t1, y[j + 2] -= s2 + t2, y[j + 3] -= s3 + t3;
+    }
+    for (; j < S.ncol; ++j) {
+      const double* __restrict a = S.x + j * ld + S.ncol;
+      Row s{0, 0, 0, 0}, t = s;
+      long i = 0;
+      for (; i + 2 <= m; i += 2) s += a[i] * W[i], t += a[i + 1] * W[i + 1];
+      if (i < m) s += a[i] * W[i];
+      y[j] -= s + t;
+    }
+  }
+  for (long j = S.ncol - 1; j >= 0; --j) {
+    const double* __restrict a = S.x + j * ld;
+    Row s = y[j], t{0, 0, 0, 0};
+    long i = j + 1;
+    for (; i + 2 <= S.ncol; i += 2) s -= a[i] * y[i], t -= a[i + 1] * y[i + 1];
+    if (i < S.ncol) s -= a[i] * y[i];
+    y[j] = (s + t) / a[j];
+  }
+}
+
+Row* rows(std::vector<double>& v) { return reinterpret_cast<Row*>(v.data()); }
+
+}  // namespace
+
+void SupernodalSubstitution::clear() {
+  L_ = nullptr;
+  for (auto* v : {&group_[0], &group_[1], &top_}) v->clear();
+  top_slot_.clear();
+  num_top_columns_ = 0;
+  parallel_share_ = 0;
+  for (auto* v : {&y_, &w_[0], &w_[1], &w_[2], &top_update_[0], &top_update_[1]}) std::vector<double>().swap(*v);
+}
+
+bool SupernodalSubstitution::plan(const cholmod_factor_struct* factor) {
+  clear();
+  const cholmod_factor* L = factor;
+  if (!L || !L->is_super || L->xtype != CHOLMOD_REAL || L->itype != CHOLMOD_LONG || L->n == 0 ||
+      L->n > static_cast<size_t>(INT_MAX))
+    return false;
+  const long n = static_cast<long>(L->n), ns = static_cast<long>(L->nsuper);
+  // The supernodal elimination tree: a supernode's parent holds its first row below the diagonal. A
+  // postordered analysis numbers every subtree contiguously, parents last.
+  std::vector<int> super_of(n);
+  std::vector<long> parent(ns, -1);
+  for (long s = 0; s < ns; ++s) {
+    const Supernode S(L, s);
+    std::fill(super_of.begin() + S.j0, super_of.begin() + S.j0 + S.ncol, static_cast<int>(s));
+  }
+  std::vector<double> work(ns), subtree(ns);  // entries read per supernode, and in its subtree
+  std::vector<std::vector<long>> children(ns);
+  for (long s = 0; s < ns; ++s) {
+    const Supernode S(L, s);
+    if (S.m > 0) {
+      parent[s] = super_of[S.below[0]];
+      if (parent[s] <= s) return false;  // not postordered
+      children[parent[s]].push_back(s);
+    }
+    work[s] = static_cast<double>(S.ncol) * static_cast<double>(S.ncol + S.m);
+  }
+  for (long s = 0; s < ns; ++s) {
+    subtree[s] += work[s];
+    if (parent[s] >= 0) subtree[parent[s]] += subtree[s];
+  }
+  double total = 0;
+  std::vector<long> frontier;  // roots of disjoint subtrees, split between the two threads
+  for (long s = 0; s < ns; ++s)
+    if (parent[s] < 0) frontier.push_back(s), total += subtree[s];
+  // Move the largest subtree's root above the split until the split's time (the root work done on one
+  // thread, plus the larger half of the subtrees shared out largest first) stops improving.
+  auto halves = [&](const std::vector<long>& roots, std::vector<int>* half) {
+    std::vector<long> order(roots.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<long>(i);
+    std::sort(order.begin(), order.end(), [&](long a, long b) { return subtree[roots[a]] > subtree[roots[b]]; });
+    double load[2] = {0, 0};
+    if (half) half->assign(roots.size(), 0);
+    for (long i : order) {
+      const int h = load[1] < load[0];
+      load[h] += subtree[roots[i]];
+      if (half) (*half)[i] = h;
+    }
+    return std::max(load[0], load[1]);
+  };
+  double above = 0, best = total;
+  std::vector<long> best_frontier;
+  for (int step = 0; step < 1024 && !frontier.empty(); ++step) {
+    const double time = above + halves(frontier, nullptr);
+    if (time < best) best = time, best_frontier = frontier;
+    const auto largest = std::max_element(frontier.begin(), frontier.end(),
+                                          [&](long a, long b) { return subtree[a] < subtree[b]; });
+    const long s = *largest;
+    frontier.erase(largest);
+    above += work[s];
+    frontier.insert(frontier.end(), children[s].begin(), children[s].end());
+  }
+  // Groups: 0 and 1 for the subtrees under the chosen roots, 2 for the rest (parents before children).
+  std::vector<int> group(ns, 2), half;
+  halves(best_frontier, &half);
+  for (size_t i = 0; i < best_frontier.size(); ++i) group[best_frontier[i]] = half[i];
+  for (long s = ns - 1; s >= 0; --s)
+    if (group[s] == 2 && parent[s] >= 0) group[s] = group[parent[s]];
+  top_slot_.assign(n, -1);
+  double parallel = 0;
+  for (long s = 0; s < ns; ++s) {
+    if (group[s] < 2) {
+      group_[group[s]].push_back(s);
+      parallel += work[s];
+      continue;
+    }
+    top_.push_back(s);
+    const Supernode S(L, s);
+    for (long j = S.j0; j < S.j0 + S.ncol; ++j) top_slot_[j] = static_cast<int>(num_top_columns_++);
+  }
+  parallel_share_ = total > 0 ? parallel / total : 0;
+  y_.assign(4 * n, 0.0);
+  for (auto& w : w_) w.assign(4 * std::max<size_t>(L->maxesize, 1), 0.0);
+  for (auto& t : top_update_) t.assign(4 * std::max<long>(num_top_columns_, 1), 0.0);
+  L_ = factor;
+  return true;
+}
+
+void SupernodalSubstitution::solve(const double* B, double* X, int k) const {
+  const cholmod_factor* L = L_;
+  const long n = static_cast<long>(L->n);
+  const auto* perm = static_cast<const Int*>(L->Perm);
+  Row* Y = rows(y_);
+  parallel_for_chunks(n, [&](long begin, long end) {  // Y = Pᵀ B, four to a row
+    for (long i = begin; i < end; ++i) {
+      Row r{0, 0, 0, 0};
+      for (int c = 0; c < k; ++c) r[c] = B[perm[i] + c * n];
+      Y[i] = r;
+    }
+  });
+  // Forward: the two groups in parallel, their updates to top rows collected apart, then the top.
+  auto forward_group = [&](int g) {
+    Row* T = rows(top_update_[g]);
+    std::fill(T, T + num_top_columns_, Row{0, 0, 0, 0});
+    for (long s : group_[g]) forward(Supernode(L, s), Y, rows(w_[g]), top_slot_.data(), T);
+  };
+  tbb::parallel_invoke([&] { forward_group(0); }, [&] { forward_group(1); });
+  for (long s : top_) {
+    const Supernode S(L, s);
+    for (long j = S.j0; j < S.j0 + S.ncol; ++j) {
+      const int t = top_slot_[j];
+      Y[j] -= rows(top_update_[0])[t] + rows(top_update_[1])[t];
+    }
+  }
+  for (long s : top_) forward(Supernode(L, s), Y, rows(w_[2]), nullptr, nullptr);
+  // Back: the top first, then the two groups in parallel (each reads the top and writes only its rows).
+  for (auto s = top_.rbegin(); s != top_.rend(); ++s) back(Supernode(L, *s), Y, rows(w_[2]));
+  auto back_group = [&](int g) {
+    for (auto s = group_[g].rbegin(); s != group_[g].rend(); ++s) back(Supernode(L, *s), Y, rows(w_[g]));
+  };
+  tbb::parallel_invoke([&] { back_group(0); }, [&] { back_group(1); });
+  parallel_for_chunks(n, [&](long begin, long end) {  // X = P Y
+    for (long i = begin; i < end; ++i)
+      for (int c = 0; c < k; ++c) X[perm[i] + c * n] = Y[i][c];
+  });
+}
+
+}  // namespace msd

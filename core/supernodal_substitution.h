@@ -7,7 +7,9 @@
 //! below the memory bandwidth, on one core. Here each supernode is a few vector loops over its columns,
 //! all right-hand sides of a row in one 4-wide vector, and the elimination tree is split into two
 //! subtrees of about equal work that run in parallel, the few supernodes above them after (forward) or
-//! before (back) them. The result equals CHOLMOD's to rounding (2e-15 relative, measured).
+//! before (back) them. The result equals CHOLMOD's to rounding (2e-15 relative, measured). 3-column
+//! solve on the 1M lift's Laplacian (630k unknowns): 82–89 ms against CHOLMOD's 211–228 ms (README,
+//! Benchmarks).
 
 #include <vector>
 

@@ -232,9 +232,8 @@ void SupernodalSubstitution::solve(const double* B, double* X, int k) const {
   });
   // Forward: the two groups in parallel, their updates to top rows collected apart, then the top.
   auto forward_group = [&](int g) {
-    Row* T = rows(top_update_[g]);
-    std::fill(T, T + num_top_columns_, Row{0, 0, 0, 0});
-    for (long s : group_[g]) forward(Supernode(L, s), Y, rows(w_[g]), top_slot_.data(), T);
+    std::fill(top_update_[g].begin(), top_update_[g].end(), 0.0);
+    for (long s : group_[g]) forward(Supernode(L, s), Y, rows(w_[g]), top_slot_.data(), rows(top_update_[g]));
   };
   tbb::parallel_invoke([&] { forward_group(0); }, [&] { forward_group(1); });
   for (long s : top_) {

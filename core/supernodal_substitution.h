@@ -29,8 +29,9 @@ class SupernodalSubstitution {
   bool planned() const { return L_ != nullptr; }
   void clear();
 
-  //! X = A⁻¹ B with A = P Lᵀ L Pᵀ: B and X are n×k column-major (leading dimension n), 1 ≤ k ≤ 4, and
-  //! must not overlap. Allocates nothing; not safe to call concurrently on one object.
+  //! X = A⁻¹ B with A = P Lᵀ L Pᵀ: B and X are n×k column-major (leading dimension n), 1 ≤ k ≤ 4; X may
+  //! be B (all of B is read before X is written). Allocates nothing; not safe to call concurrently on one
+  //! object.
   void solve(const double* B, double* X, int k) const;
 
   //! Share of the factor's entries in the two parallel subtrees (the rest is solved on one thread).

@@ -27,6 +27,7 @@ SparseMatrix test_matrix(Positions& P, Faces& F) {
   const LaplaceOperator lap = cotan_laplacian(P, F);
   return SparseMatrix(-lap.W + lap.W * lap.mass.cwiseInverse().asDiagonal() * lap.W);
 }
+// The same made positive definite without constraints.
 SparseMatrix test_matrix_spd() {
   Positions P;
   Faces F;
@@ -37,10 +38,7 @@ SparseMatrix test_matrix_spd() {
 }  // namespace
 
 TEST_CASE("SparseSPDSolver solves several right-hand sides at once", "[core][solver]") {
-  Positions P;
-  Faces F;
-  SparseMatrix A = test_matrix(P, F);
-  A.diagonal().array() += 1.0;  // make it SPD without constraints
+  const SparseMatrix A = test_matrix_spd();
   SparseSPDSolver solver;
   solver.factor(A);
   INFO("backend " << SparseSPDSolver::backend());
@@ -66,10 +64,7 @@ TEST_CASE("OpenBLAS behind CHOLMOD uses the kernels the CPU allows, not its Pres
   const std::string kernels = select_blas_kernels();
   CHECK(strcasecmp(kernels.c_str(), "prescott") != 0);
   CHECK(select_blas_kernels() == kernels);  // a second call changes nothing
-  Positions P;
-  Faces F;
-  SparseMatrix A = test_matrix(P, F);
-  A.diagonal().array() += 1.0;
+  const SparseMatrix A = test_matrix_spd();
   SparseSPDSolver solver;
   solver.factor(A);
   const Eigen::MatrixXd B = Eigen::MatrixXd::Random(A.rows(), 3);
@@ -95,7 +90,7 @@ SparseMatrix grid_laplacian(int n) {
 TEST_CASE("SparseSPDSolver: 1 to 4 right-hand sides equal the same columns solved among 5, also in place",
           "[core][solver]") {
   // Up to 4 columns take the solver's own substitution (two threads), 5 take CHOLMOD's solve.
-  for (const SparseMatrix& A : {grid_laplacian(120), SparseMatrix(test_matrix_spd())}) {
+  for (const SparseMatrix& A : {grid_laplacian(120), test_matrix_spd()}) {
     SparseSPDSolver solver;
     solver.factor(A);
     const Eigen::MatrixXd B = Eigen::MatrixXd::Random(A.rows(), 5);
@@ -169,10 +164,7 @@ TEST_CASE("SupernodalSubstitution equals CHOLMOD's solve, splits the tree, refus
 #endif
 
 TEST_CASE("SparseSPDSolver::refactor reuses the analysis for new values on the same pattern", "[core][solver]") {
-  Positions P;
-  Faces F;
-  SparseMatrix A = test_matrix(P, F);
-  A.diagonal().array() += 1.0;
+  const SparseMatrix A = test_matrix_spd();
   SparseSPDSolver solver;
   CHECK_THROWS_AS(solver.refactor(A), UsageError);
   solver.factor(A);

@@ -8,6 +8,7 @@
 
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/mesh_io.h"
 
 namespace msd::cli {
@@ -26,8 +27,10 @@ std::vector<double> numbers(const std::string& where, const std::string& text, s
     const std::string item = text.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
     char* end = nullptr;
     const double x = std::strtod(item.c_str(), &end);  // overflow gives ±inf; underflow a finite tiny value
-    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(x))
-      throw InvalidInput(where + ": '" + item + "' is not a finite number (expected " + what + ")");
+    // strtod also reads C's hexadecimal numbers: 0x10 is not the 0 or 10 a user meant.
+    const bool decimal = item.find_first_of("xX") == std::string::npos;
+    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(x) || !decimal)
+      throw InvalidInput(where + ": '" + item + "' is not a finite decimal number (expected " + what + ")");
     out.push_back(x);
     if (comma == std::string::npos) break;
     at = comma + 1;
@@ -224,6 +227,7 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
     if (!vertices.empty()) centroid[k] /= static_cast<double>(vertices.size());
   }
   int current = -1;  // the handle the next transforms move; -1: all of them
+  std::vector<double> turned(nh, 0.0);  // degrees each handle's rotations add up to
   const std::vector<Step> all = steps();
   for (size_t i = 0; i < all.size(); ++i) {
     const Step& s = all[i];
@@ -245,10 +249,18 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
     } else if (s.option == rotate_) {
       const auto v = numbers(option, s.value, {4}, "AX,AY,AZ,DEGREES");
       if (vec(v).squaredNorm() == 0) throw InvalidInput(option + ": the axis is zero");
-      // Beyond this, degrees lose the precision of a turn (1e80 would be any angle at all).
-      if (std::abs(v[3]) > 3.6e6)
-        throw InvalidInput(option + ": " + std::to_string(v[3]) + " degrees is out of range (at most 10 000 turns, "
-                           "|DEG| <= 3600000)");
+      // A handle's transform is a matrix: it keeps a rotation only up to whole turns, so 190° would be the
+      // −170° transform, and methods that blend rotations (propagate, gradient, ARAP's start) would turn
+      // the other way round. Each handle's rotations may add up to half a turn.
+      for (int k = (current < 0 ? 0 : current); k < (current < 0 ? nh : current + 1); ++k) {
+        turned[k] += std::abs(v[3]);
+        if (!(turned[k] <= 180))
+          throw InvalidInput(option + ": the rotations of handle " + std::to_string(k) + " add up to " +
+                             format_number(turned[k]) + " degrees, more than half a turn. A handle's transform "
+                             "is a matrix, which keeps a rotation only up to whole turns (190 degrees is the "
+                             "transform of -170), so methods that blend rotations would turn the shorter way, "
+                             "against the one asked for; give at most 180 degrees in total per handle");
+      }
       M.topLeftCorner<3, 3>() = Eigen::AngleAxisd(v[3] * kPi / 180, vec(v).normalized()).toRotationMatrix();
     } else {
       const auto v = numbers(option, s.value, {1, 3}, "S or SX,SY,SZ");

@@ -143,11 +143,22 @@ expect_error 1 "selects no vertex" "$msdeform" deform lift.off --handle sphere:9
 expect_error 1 "the vertex id must be an integer in [0," \
   "$msdeform" deform lift.off --handle vertex:99999999,1 --translate 0,0,1 -o x.off
 expect_error 1 "unknown selection 'cube'" "$msdeform" deform lift.off --handle cube:1 --translate 0,0,1 -o x.off
-expect_error 1 "degrees is out of range" "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,1,0,1e80 -o x.off
+# A handle's transform keeps a rotation only up to whole turns: more than half a turn per handle is refused
+# (190 degrees gave the -170 degree transform, and methods that blend rotations twisted the other way).
+expect_error 1 "add up to 1e+80 degrees, more than half a turn" \
+  "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,1,0,1e80 -o x.off
+expect_error 1 "the rotations of handle 0 add up to 190 degrees" \
+  "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,1,0,-190 -o x.off
+expect_error 1 "--rotate 1,0,0,100: the rotations of handle 1 add up to 200 degrees" \
+  "$msdeform" deform lift.off --handle vertex:0,1 --handle vertex:40,1 --rotate 0,1,0,100 --rotate 1,0,0,100 -o x.off
+"$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,1,0,180 --method shell -o half.off >/dev/null 2>&1 ||
+  fail "--rotate of exactly half a turn"
+expect_error 1 "'0x10' is not a finite decimal number" \
+  "$msdeform" deform lift.off --handle vertex:0,1 --translate 0x10,0,0 -o x.off
 expect_error 2 "--handle has no value before --translate" \
   "$msdeform" deform lift.off --fixed vertex:5,1 --handle --translate 0,0.1,0 -o x.off
 expect_error 1 "--rotate 0,0,0,30: the axis is zero" "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,0,0,30 -o x.off
-expect_error 1 "'nan' is not a finite number" "$msdeform" deform lift.off --handle vertex:0,1 --translate nan,0,0 -o x.off
+expect_error 1 "'nan' is not a finite decimal number" "$msdeform" deform lift.off --handle vertex:0,1 --translate nan,0,0 -o x.off
 expect_error 1 "not both" "$msdeform" deform lift.off --sel lift.sel --handle vertex:0,1 --translate 0,0,1 -o x.off
 expect_error 1 "not both" "$msdeform" deform lift.off --sel lift.sel --def lift.def --translate 0,0,1 -o x.off
 expect_error 1 "needs handle transforms" "$msdeform" deform lift.off --handle vertex:0,1 -o x.off

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh.h"
@@ -30,6 +31,36 @@ void check_extent(const Positions& P, const std::string& who) {
                        " and the largest |coordinate| " + format_number(largest) +
                        "; msdeform works with sizes from 1e-70 to 1e70 (squared areas must fit a double): rescale "
                        "the input");
+}
+
+std::string extent_outlier_warning(const Positions& P, const std::string& who) {
+  const long n = static_cast<long>(P.rows());
+  if (n < 8) return {};
+  const long k = std::max(1L, n / 1000);  // coordinates left out at each end of an axis
+  Vec3 lo, hi;
+  std::vector<double> c(n);
+  for (int d = 0; d < 3; ++d) {
+    std::copy(P.col(d).data(), P.col(d).data() + n, c.begin());
+    std::nth_element(c.begin(), c.begin() + k, c.end());
+    lo[d] = c[k];
+    std::nth_element(c.begin(), c.begin() + (n - 1 - k), c.end());
+    hi[d] = c[n - 1 - k];
+  }
+  const double diagonal = bounding_box_diagonal(P), core = (hi - lo).norm();
+  if (!(diagonal > 10 * core)) return {};
+  long farthest = 0;
+  double distance = -1;
+  for (long v = 0; v < n; ++v) {
+    const Vec3 p = P.row(v);
+    const double outside = (p - p.cwiseMax(lo).cwiseMin(hi)).norm();
+    if (outside > distance) distance = outside, farthest = v;
+  }
+  return who + ": " + kOutlierWarning + ": its diagonal is " + format_number(diagonal) +
+         ", but without the " + std::to_string(k) + " most extreme coordinate(s) at each end of each axis it is " +
+         format_number(core) + " (vertex " +
+         std::to_string(farthest) + " lies " + format_number(distance) +
+         " outside it). Tolerances given in bounding-box diagonals (ARAP's and PriMo's stopping tests, constraint "
+         "errors) are " + format_number(diagonal / core) + " times looser than meant; remove the outliers first";
 }
 
 }  // namespace msd

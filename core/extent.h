@@ -19,4 +19,14 @@ std::string format_number(double x);
 //! before). \throw InvalidInput starting with `who`, naming the diagonal and the largest |coordinate|.
 void check_extent(const Positions& P, const std::string& who);
 
+//! Empty, or a warning starting with `who` when a few vertices set the bounding box: its diagonal is more than
+//! 10 times that of the box holding all but the 0.1 % most extreme coordinates (at least one) at each end of
+//! each axis (P of 8 vertices or more; a stray vertex of a scan, a point at the origin). Tolerances given in
+//! bounding-box diagonals (ARAP's and PriMo's stopping tests, constraint errors, the encodings' accuracy) are
+//! then that many times looser than meant. The warning names the vertex farthest outside that box.
+//! O(#V) (three selections).
+std::string extent_outlier_warning(const Positions& P, const std::string& who);
+//! The words every such warning holds (for a caller that gathers warnings of nested deformers once).
+constexpr const char* kOutlierWarning = "a few outlying vertices set the bounding box";
+
 }  // namespace msd

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/deformation/shell.h"
 
@@ -45,7 +46,13 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
     throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on the base B (not the "
                       "input mesh); the base is degenerate there, try a smaller detail scale: " + e.what());
   }
-  for (const std::string& w : base_deformer_->prepare_warnings()) prepare_warnings_.push_back(w);
+  const auto said = [&](const char* words) {
+    return std::any_of(prepare_warnings_.begin(), prepare_warnings_.end(),
+                       [&](const std::string& w) { return w.find(words) != std::string::npos; });
+  };
+  for (const std::string& w : base_deformer_->prepare_warnings())
+    if (w.find(kOutlierWarning) == std::string::npos || !said(kOutlierWarning))  // B has S's outliers: once
+      prepare_warnings_.push_back(w);
   encoding_->set_anchor_vertices(region.constrained_vertices());
   encoding_->set_placed_vertices(region.constrained_vertices());  // do_deform places them itself
   if (!d.base_is_input) {

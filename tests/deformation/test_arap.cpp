@@ -138,3 +138,23 @@ TEST_CASE("arap: the bent bumpy plane is more rigid than the shell's", "[arap]")
     CHECK(arap_rigidity < 0.5 * shell_rigidity);
   }
 }
+
+TEST_CASE("arap: a stray vertex that sets the bounding box is named in a prepare warning", "[arap]") {
+  // A scan's stray vertex 1e6 away made the diagonal, and with it ARAP's stopping test, 1e6 times larger:
+  // the knight stopped after one iteration, reported as converged. The prepare now says so.
+  Scene s = scene("bend120");
+  ArapDeformer clean;
+  clean.prepare(s.P, s.F, s.region);
+  for (const std::string& w : clean.prepare_warnings()) CHECK(w.find("outlying") == std::string::npos);
+  const std::vector<int> free = s.region.free_vertices();
+  REQUIRE(!free.empty());
+  const int stray = free[free.size() / 2];
+  s.P(stray, 2) += 1e6;
+  ArapDeformer spiked;
+  spiked.prepare(s.P, s.F, s.region);
+  bool named = false;
+  for (const std::string& w : spiked.prepare_warnings())
+    named = named || (w.find("a few outlying vertices set the bounding box") != std::string::npos &&
+                      w.find("vertex " + std::to_string(stray) + " lies") != std::string::npos);
+  CHECK(named);
+}

@@ -148,9 +148,13 @@ void add_deform_command(CLI::App& app) {
                   d.check.max_height, d.check.min_curvature_radius, d.check.max_fold_ratio);
     }
     const FrameReport& report = deformer->frame_report();
-    if (deformer->traits().solve == DeformerSolve::Iterative)
-      std::printf("  frame: %d iterations, relative residual %.3g%s\n", report.iterations, report.residual,
-                  report.converged ? "" : " (not converged)");
+    if (deformer->traits().solve == DeformerSolve::Iterative) {
+      if (report.residual >= 0)
+        std::printf("  frame: %d iterations, relative residual %.3g%s\n", report.iterations, report.residual,
+                    report.converged ? "" : " (not converged)");
+      else  // e.g. multi-scale volumes without a detail layer: S' = B', nothing to iterate
+        std::printf("  frame: no iteration was needed\n");
+    }
     if (report.constraint_error >= 0) {
       const double diag = bounding_box_diagonal(rest);
       std::printf("  constraints: largest distance of a constrained vertex from its target %.3g", report.constraint_error);

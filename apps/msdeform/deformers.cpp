@@ -94,6 +94,7 @@ void DeformerOptions::add_to(CLI::App& cmd) {
                                          joined(builtin_methods().names(), "|"))
       ->capture_default_str();
   encoding_option = cmd.add_option("--encoding", encoding, "multiscale: detail encoding: " + joined(encoding_names(), "|"))
+      ->check(CLI::IsMember(encoding_names()))
       ->capture_default_str();
   add_settings(cmd);
 }
@@ -138,7 +139,10 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   iterations_option = iterative->add_option("--iterations", iterations,
                                             "iterations per frame at most (default: arap " +
                                                 std::to_string(ArapOptions{}.max_iterations) + ", primo " +
-                                                std::to_string(PrimoOptions{}.max_iterations) + ")")
+                                                std::to_string(PrimoOptions{}.max_iterations) +
+                                                ", multiscale-volumes " +
+                                                std::to_string(DisplacementVolumeOptions{}.max_iterations) +
+                                                " relaxation sweeps)")
                           ->check(CLI::Range(1, 1000000));
   tolerance_option = iterative->add_option("--tolerance", tolerance,
                                            "stop when one iteration moves no vertex (arap) or no prism corner (primo) "
@@ -146,7 +150,7 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
                                            "--iterations (default: arap " + compact(ArapOptions{}.tolerance) +
                                                ", primo " + compact(PrimoOptions{}.tolerance) + ")")
                          ->check(CLI::Range(0.0, 1.0));  // a fraction (NonNegativeNumber printed DBL_MAX)
-  scoped_options.push_back({iterations_option, {"arap", "primo"}});
+  scoped_options.push_back({iterations_option, {"arap", "primo", "multiscale-volumes"}});
   scoped_options.push_back({tolerance_option, {"arap", "primo"}});
   auto* arap = cmd.add_option_group("arap", "arap: as-rigid-as-possible (9.8)");
   scoped_options.push_back({arap->add_option("--anderson", settings.arap.anderson,
@@ -231,15 +235,16 @@ std::string DeformerOptions::method_name() const {
   if (!multiscale && (decomposition.given() || (base_method_option && base_method_option->count() > 0)))
     throw InvalidInput("--base, --detail-scale, --fairing, --remesh-base and --base-method apply to --method "
                        "multiscale; --method " + method + " has no base to decompose");
-  const auto uses = [&](const std::string& m) { return method == m || (multiscale && settings.base_method == m); };
+  const std::string full = method == "multiscale" ? "multiscale-" + encoding : method;
+  const auto uses = [&](const std::string& m) { return full == m || (multiscale && settings.base_method == m); };
   for (const Scoped& scoped : scoped_options) {
     if (scoped.option->count() == 0 ||
         std::any_of(scoped.methods.begin(), scoped.methods.end(), uses))
       continue;
     throw InvalidInput(scoped.option->get_name() + " applies to --method " + joined(scoped.methods, ", ") +
-                       " (or multiscale with such a --base-method), not --method " + method);
+                       " (or multiscale with such a --base-method), not --method " + full);
   }
-  if (method == "multiscale") return "multiscale-" + encoding;
+  if (method == "multiscale") return full;
   if (encoding_option && encoding_option->count() > 0)
     throw InvalidInput("--encoding " + encoding + " applies to --method multiscale; --method " + method +
                        (multiscale ? " names its encoding itself" : " has no detail encoding"));
@@ -248,7 +253,8 @@ std::string DeformerOptions::method_name() const {
 
 MethodSettings DeformerOptions::method_settings(const EditCase& edit) const {
   MethodSettings s = settings;
-  if (iterations_option && iterations_option->count() > 0) s.arap.max_iterations = s.primo.max_iterations = iterations;
+  if (iterations_option && iterations_option->count() > 0)
+    s.arap.max_iterations = s.primo.max_iterations = s.encoding.volumes.max_iterations = iterations;
   if (tolerance_option && tolerance_option->count() > 0) s.arap.tolerance = s.primo.tolerance = tolerance;
   s.lattice.least_norm.affine_part = s.cage.least_norm.affine_part = !seed_least_norm;
   if (!cage_file.empty()) {

@@ -1,12 +1,50 @@
 // msdeform: command-line front end of the msdeform library.
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <string>
 
 #include "apps/msdeform/commands.h"
 #include "msdeform/core/blas_kernels.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/memory.h"
+#include "msdeform/core/scenes.h"
 #include "msdeform/core/version.h"
+
+namespace {
+
+// Checks the parser makes for every command, so that their failures are usage errors (exit 2) like any other
+// value outside an option's range. NaN passes CLI11's ranges (every comparison with it is false), and
+// strtod reads infinities and C's hexadecimal numbers: floating-point options refuse them. --resolution
+// (a string such as 100k) is read as the scenes will read it.
+void add_common_checks(CLI::App& app) {
+  const CLI::Validator finite(
+      [](std::string& text) -> std::string {
+        const double x = std::strtod(text.c_str(), nullptr);
+        if (!std::isfinite(x)) return "'" + text + "' is not a finite number";
+        if (text.find_first_of("xX") != std::string::npos) return "'" + text + "' is not a decimal number";
+        return {};
+      },
+      "", "finite decimal");
+  const CLI::Validator resolution(
+      [](std::string& text) -> std::string {
+        try {
+          msd::parse_resolution(text);
+        } catch (const msd::Error& e) {
+          return e.what();
+        }
+        return {};
+      },
+      "", "resolution");
+  for (CLI::Option* option : app.get_options()) {
+    if (option->get_type_name().find("FLOAT") != std::string::npos) option->check(finite);
+    if (option->get_name() == "--resolution") option->check(resolution);
+  }
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) add_common_checks(*sub);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   msd::retain_freed_memory();
@@ -25,6 +63,7 @@ int main(int argc, char** argv) {
   msd::cli::add_compare_command(app);
   msd::cli::add_render_command(app);
   msd::cli::add_view_command(app);
+  add_common_checks(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

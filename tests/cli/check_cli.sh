@@ -45,6 +45,26 @@ name=$(printf 'b%.0s' $(seq 246)).off
 # Usage errors exit 2 (CLI11's own codes, 105 and up, before).
 expect_error 2 "not in range 1 to 1000000" "$msdeform" deform --scene lift --method arap --iterations 0 -o x.off
 expect_error 2 "--bogus" "$msdeform" deform --scene lift --bogus -o x.off
+# An output path that is an existing folder without an extension said "unknown format ''".
+mkdir -p out-folder
+expect_error 1 "out-folder is a folder; give a mesh file name" "$msdeform" deform --scene lift -o out-folder
+# NaN passed CLI11's ranges and reached the library (exit 1); every floating-point option refuses it now.
+expect_error 2 "--tolerance: 'nan' is not a finite number" "$msdeform" deform --scene lift --method arap --tolerance nan -o x.off
+expect_error 2 "'0x1p-3' is not a decimal number" "$msdeform" deform --scene lift --method arap --tolerance 0x1p-3 -o x.off
+expect_error 2 "resolution '1': expected a vertex count from 16" "$msdeform" scene lift --resolution 1 -o x
+expect_error 2 "--encoding: foo not in {vectors,normal,volumes,transfer}" \
+  "$msdeform" deform --scene lift --method multiscale --encoding foo -o x.off
+# The volumes encoding's relaxation takes --iterations (its warning says to raise the limit); --tolerance,
+# a fraction of the diagonal for arap and primo, does not apply to it.
+"$msdeform" deform --scene lift --resolution 2k --method multiscale --encoding volumes --iterations 3 -o v.off \
+  >out.txt 2>err.txt || { cat err.txt; fail "multiscale volumes with --iterations"; }
+grep -qF "frame: 3 iterations" out.txt || { cat out.txt; fail "--iterations 3 did not limit the volumes' sweeps"; }
+expect_error 1 "--tolerance applies to --method arap, primo (or multiscale with such a --base-method), not --method multiscale-volumes" \
+  "$msdeform" deform --scene lift --method multiscale --encoding volumes --tolerance 0.1 -o x.off
+# Without a detail layer there is nothing to iterate: no "0 iterations, relative residual -1".
+"$msdeform" deform --scene lift --resolution 16 --method multiscale --encoding volumes -o v.off >out.txt 2>&1 ||
+  fail "multiscale volumes at 16 vertices"
+grep -qF "frame: no iteration was needed" out.txt || { cat out.txt; fail "the frame line of a solve-free frame"; }
 # STL output keeps no vertex list: said before the work.
 "$msdeform" deform --scene lift --resolution 2k --method shell -o lifted.stl >/dev/null 2>err.txt || fail "deform to STL"
 grep -q "STL keeps no vertex list" err.txt || fail "no warning that STL output renumbers the vertices"
@@ -53,8 +73,8 @@ touch not-a-folder
 expect_error 1 "is a file; compare writes a folder" "$msdeform" compare --scenes lift -o not-a-folder
 grep -q "building scene" err.txt && fail "compare built scenes before refusing -o"
 # A resolution is decimal (0x10 was read as hexadecimal 16).
-expect_error 1 "resolution '0x10'" "$msdeform" scene lift --resolution 0x10 -o .
-expect_error 1 "resolution ' 100'" "$msdeform" scene lift --resolution " 100" -o .
+expect_error 2 "resolution '0x10'" "$msdeform" scene lift --resolution 0x10 -o .
+expect_error 2 "resolution ' 100'" "$msdeform" scene lift --resolution " 100" -o .
 
 # compare: a run that fails makes the exit status non-zero (the pages are still written).
 printf 'OFF\n4 0 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n' >cloud.off
@@ -95,7 +115,7 @@ grep -q "split along seams" err.txt || fail "no seam warning"
 "$msdeform" deform split.off --sel split.sel --def lift.def --method shell --weld 0 -o welded.off >out.txt 2>err.txt ||
   { cat err.txt; fail "deform --weld 0"; }
 grep -q "welded" out.txt || fail "--weld printed nothing"
-expect_error 1 "the distance must be finite and >= 0, got nan" "$msdeform" deform split.off --sel split.sel \
+expect_error 2 "--weld: 'nan' is not a finite number" "$msdeform" deform split.off --sel split.sel \
   --def lift.def --method shell --weld nan -o nan.off
 grep -q "split along seams" err.txt && fail "a seam warning after welding"
 [ "$(sed -n 2p welded.off | cut -d' ' -f1)" = "$(sed -n 2p split.off | cut -d' ' -f1)" ] ||

@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <sstream>
@@ -448,10 +449,16 @@ class PlyReader {
         const double scalar = binary_ ? static_cast<double>(type_size(prop.list_count_type.empty() ? prop.type : prop.list_count_type)) : 2;
         item += scalar;
       }
+      const bool first = need == 0;
       need += item * static_cast<double>(e.count);
-      if (need > left || e.count > INT32_MAX)
-        fail("element '" + printable(e.name) + "' declares " + std::to_string(e.count) + " items, but only " +
-             std::to_string(text_.size() - pos_) + " bytes follow the header");
+      if (need > left || e.count > INT32_MAX) {
+        char bytes[32];
+        std::snprintf(bytes, sizeof bytes, "%.0f", need);
+        fail("element '" + printable(e.name) + "' declares " + std::to_string(e.count) + " items, which" +
+             (first ? "" : " with the elements before it") + " need at least " + bytes + " bytes, but only " +
+             std::to_string(text_.size() - pos_) + " bytes follow the header (an element count is too large, "
+             "or the file is cut short)");
+      }
     }
   }
 
@@ -735,6 +742,9 @@ std::string file_extension(const std::string& path) {
 }
 
 void check_mesh_format(const std::string& path, const std::string& who) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error))  // a folder has no format to name
+    throw InvalidInput(who + ": " + path + " is a folder; give a mesh file name (.off .obj .ply .stl) in it");
   const std::string ext = file_extension(path);
   if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
     throw InvalidInput(who + ": " + path + ": unknown format '" + ext + "' (supported: .off .obj .ply .stl)");

@@ -320,7 +320,8 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
   CHECK_THROWS_WITH(load_mesh(write("word.off", "OFF\n3 1 0\n0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n")),
                     Contains("line 4") && Contains("'zero'"));
   CHECK_THROWS_WITH(load_mesh(write("mesh.xyz", "1 2 3\n")), Contains("unknown format"));
-  CHECK_THROWS_WITH(load_mesh(tmp.path.string() + "/"), Contains("unknown format"));
+  CHECK_THROWS_WITH(load_mesh(tmp.path.string() + "/"), Contains("is a folder; give a mesh file name"));
+  CHECK_THROWS_WITH(load_mesh(tmp.path.string()), Contains("is a folder; give a mesh file name"));  // "unknown format ''"
 }
 
 // Issue 14, kind 2: counts are checked against the bytes that follow, headers are parsed strictly, and a
@@ -332,7 +333,8 @@ TEST_CASE("readers refuse counts the file cannot hold and stop at the first bad 
   // A vertex count of 4e9 (no data): refused, not 1.5 GB/s of growth.
   CHECK_THROWS_WITH(load_soup(write("huge.ply", ply + "element vertex 4000000000\nproperty float x\nproperty float y\n"
                                                     "property float z\nend_header\n")),
-                    Contains("element 'vertex' declares 4000000000 items, but only 0 bytes follow"));
+                    Contains("element 'vertex' declares 4000000000 items, which need at least 24000000000 bytes, "
+                             "but only 0 bytes follow"));
   // An element without properties and a huge count: skipped, not looped over forever.
   const Mesh junk = load_mesh(write("junk.ply", ply + "element junk 9000000000000000000\nelement vertex 3\n"
                                                       "property float x\nproperty float y\nproperty float z\n"
@@ -375,6 +377,11 @@ TEST_CASE("PLY: big-endian data reads, and headers and items that disagree are r
                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
   const std::string vertices = "0 0 0\n1 0 0\n0 1 0\n";
   REQUIRE(load_soup(write("ok.ply", head + vertices + "3 0 1 2\n")).F.rows() == 1);
+  // The face line missing: the message said "element 'face' declares 1 items, but only 18 bytes follow the
+  // header", as if the face alone had 18 bytes; it counts what the elements before it take too.
+  CHECK_THROWS_WITH(load_soup(write("cut.ply", head + vertices)),
+                    Catch::Contains("element 'face' declares 1 items, which with the elements before it need at "
+                                    "least 20 bytes, but only 18 bytes follow the header"));
 
   // Big-endian binary: doubles and an int index list, byte-swapped.
   std::string big = "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"

@@ -91,10 +91,14 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
       if (r.rigidity.count > 0 && best_rigidity > 0 && std::isfinite(best_rigidity)) {
         const double ratio = r.rigidity.mean / best_rigidity;
         const std::string times = fmt(ratio < 10 ? "%.2g" : "%.0f", ratio);
-        const std::string text = "rigidity " + times + "× the edit's most rigid (the shape shears or stretches)";
+        // Relative to the unbroken results only: a broken one may well be more rigid (ARAP through itself).
+        const std::string text =
+            "rigidity " + times + "× the edit's most rigid unbroken result (the shape shears or stretches)";
         if (ratio > t.poor_rigidity) poor.push_back(text);
         else if (ratio > t.fair_rigidity) fair.push_back(text);
-        else good.push_back(ratio <= 1 ? "the most rigid" : "rigid (" + fmt("%.2g", ratio) + "× the most rigid)");
+        else
+          good.push_back(ratio <= 1 ? "the most rigid unbroken result"
+                                    : "rigid (" + fmt("%.2g", ratio) + "× the most rigid unbroken result)");
       }
       if (r.distortion.count > 0) {
         const double d = r.distortion.mean;
@@ -144,10 +148,14 @@ std::string verdict_summary(const std::vector<MethodResult>& results, const std:
   for (const std::string& scene : scenes) {
     const std::vector<size_t> ids = of_scene(results, scene);
     s << scene << ":";
+    bool any_best = false;
     for (size_t i : ids)
-      if (assessments[i].best)
-        s << " best " << results[i].method << " (" << assessments[i].reason << "; "
-          << fmt("%.3g", results[i].frame_ms) << " ms per frame)";
+      if (assessments[i].best) {  // the verdict too: the best of an edit can be fair or poor
+        s << " best " << results[i].method << " (" << to_string(assessments[i].verdict) << ": "
+          << assessments[i].reason << "; " << fmt("%.3g", results[i].frame_ms) << " ms per frame)";
+        any_best = true;
+      }
+    if (!any_best) s << " no usable result (every method failed, broke or could not be judged)";
     s << "\n";
     for (Verdict v :
          {Verdict::Good, Verdict::Fair, Verdict::Poor, Verdict::Broken, Verdict::NotJudged, Verdict::Failed}) {

@@ -212,7 +212,7 @@ std::string verdicts_html(const std::vector<MethodResult>& results, const std::v
   const VerdictThresholds t;
   h << "<h2>Verdicts: which method for which edit, and why</h2>\n<p>Each cell is judged on its edit: "
        "<span class=\"good\">good</span>, <span class=\"fair\">fair</span> (rigidity over "
-    << t.fair_rigidity << "× the edit's most rigid result, or details changed by over " << 100 * t.fair_distortion
+    << t.fair_rigidity << "× the edit's most rigid unbroken result, or details changed by over " << 100 * t.fair_distortion
     << " % of their height), <span class=\"poor\">poor</span> (over " << t.poor_rigidity << "×, or "
     << 100 * t.poor_distortion << " %), <span class=\"broken\">broken</span> (self-intersecting triangles, or "
        "triangles folded over a multi-scale base), <span class=\"not-judged\">not judged</span> (no rigidity or "

@@ -66,7 +66,8 @@ TEST_CASE("verdicts: thresholds relative to the edit's most rigid result, reason
   CHECK(best == 2);  // one per edit
 
   const std::string summary = verdict_summary(results, a);
-  CHECK_THAT(summary, Contains("bend: best arap") && Contains("broken: laplacian, multi") && Contains("failed: primo"));
+  CHECK_THAT(summary, Contains("bend: best arap (good: the most rigid unbroken result") &&
+                          Contains("broken: laplacian, multi") && Contains("failed: primo"));
   const std::string svg = edit_charts_svg(results, a, "bend");
   CHECK_THAT(svg, Contains("<svg") && Contains("★ arap") && Contains(">failed<") && Contains("frame time"));
   CHECK(edit_charts_svg(results, a, "no such edit").empty());
@@ -88,4 +89,22 @@ TEST_CASE("verdicts: a warning caps the verdict at fair, and a result without qu
   CHECK_THAT(a[2].reason, Contains("point cloud: no faces"));
   CHECK_FALSE(a[2].best);
   CHECK(std::string(to_string(Verdict::NotJudged)) == "not-judged");
+}
+
+TEST_CASE("verdicts: the summary gives the best's verdict, and says when an edit has no usable result",
+          "[compare][verdict]") {
+  // The survey cylinder said "best arap" with ARAP in the poor list on the next line, and an edit whose
+  // every result broke printed only its name.
+  const std::vector<MethodResult> results = {
+      result("cylinder", "arap", 0.01, 0.40),              // details changed by 40 %: poor, yet the best there
+      result("cylinder", "shell", 0.001, 0.01, 3),         // broken
+      result("camel", "shell", 0.01, 0.01, 12),            // broken
+      result("camel", "rbf", 0.02, 0.01, 0, 5),            // broken
+  };
+  const std::vector<Assessment> a = assess(results);
+  CHECK(a[0].best);
+  CHECK(a[0].verdict == Verdict::Poor);
+  const std::string summary = verdict_summary(results, a);
+  CHECK_THAT(summary, Contains("cylinder: best arap (poor: details changed by 40 %"));
+  CHECK_THAT(summary, Contains("camel: no usable result (every method failed, broke or could not be judged)"));
 }

@@ -33,10 +33,10 @@ void check_extent(const Positions& P, const std::string& who) {
                        "the input");
 }
 
-std::string extent_outlier_warning(const Positions& P, const std::string& who) {
+std::string extent_outlier_warning(const Positions& P, const Faces& F, const std::string& who) {
   const long n = static_cast<long>(P.rows());
   if (n < 8) return {};
-  const long k = std::max(1L, n / 1000);  // coordinates left out at each end of an axis
+  const long k = std::max({n / 1000, std::min(5L, n / 100), 1L});  // coordinates left out at each end of an axis
   Vec3 lo, hi;
   std::vector<double> c(n);
   for (int d = 0; d < 3; ++d) {
@@ -55,12 +55,21 @@ std::string extent_outlier_warning(const Positions& P, const std::string& who) {
     const double outside = (p - p.cwiseMax(lo).cwiseMin(hi)).norm();
     if (outside > distance) distance = outside, farthest = v;
   }
-  return who + ": " + kOutlierWarning + ": its diagonal is " + format_number(diagonal) +
-         ", but without the " + std::to_string(k) + " most extreme coordinate(s) at each end of each axis it is " +
-         format_number(core) + " (vertex " +
-         std::to_string(farthest) + " lies " + format_number(distance) +
-         " outside it). Tolerances given in bounding-box diagonals (ARAP's and PriMo's stopping tests, constraint "
-         "errors) are " + format_number(diagonal / core) + " times looser than meant; remove the outliers first";
+  if (F.rows() > 0) {  // a stray lies far from the rest in edge lengths, not only in the box
+    std::vector<double> edges(3 * static_cast<size_t>(F.rows()));
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int j = 0; j < 3; ++j)
+        edges[3 * f + j] = (P.row(F(f, j)) - P.row(F(f, (j + 1) % 3))).norm();
+    const auto middle = edges.begin() + static_cast<long>(edges.size() / 2);
+    std::nth_element(edges.begin(), middle, edges.end());
+    if (!(distance > 100 * *middle)) return {};
+  }
+  return who + ": " + kOutlierWarning + ": its diagonal is " + format_number(diagonal) + ", but without the " +
+         std::to_string(k) + " most extreme coordinate(s) at each end of each axis it is " + format_number(core) +
+         " (vertex " + std::to_string(farthest) + " lies " + format_number(distance) +
+         " outside that box). Tolerances given in bounding-box diagonals (ARAP's and PriMo's stopping tests, "
+         "constraint errors) are " + format_number(diagonal / core) + " times looser than meant; remove the "
+         "outliers first";
 }
 
 }  // namespace msd

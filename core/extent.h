@@ -19,13 +19,15 @@ std::string format_number(double x);
 //! before). \throw InvalidInput starting with `who`, naming the diagonal and the largest |coordinate|.
 void check_extent(const Positions& P, const std::string& who);
 
-//! Empty, or a warning starting with `who` when a few vertices set the bounding box: its diagonal is more than
-//! 10 times that of the box holding all but the 0.1 % most extreme coordinates (at least one) at each end of
-//! each axis (P of 8 vertices or more; a stray vertex of a scan, a point at the origin). Tolerances given in
-//! bounding-box diagonals (ARAP's and PriMo's stopping tests, constraint errors, the encodings' accuracy) are
-//! then that many times looser than meant. The warning names the vertex farthest outside that box.
-//! O(#V) (three selections).
-std::string extent_outlier_warning(const Positions& P, const std::string& who);
+//! Empty, or a warning starting with `who` when a few stray vertices set the bounding box (a scan's stray
+//! points, a vertex at the origin): the box's diagonal is more than 10 times that of the box left without the
+//! k most extreme coordinates at each end of each axis (k = #V / 1000, at least min(5, #V / 100) and 1), and
+//! the vertex farthest outside that box lies more than 100 median edge lengths of F from it (F may be empty:
+//! a point cloud; then the box alone decides). A coarse cone's apex is far from the rest too, but not in
+//! edge lengths. Tolerances given in bounding-box diagonals (ARAP's and PriMo's stopping tests, constraint
+//! errors) are then that many times looser than meant. The warning names the farthest vertex. P is #V by 3,
+//! F #F by 3; O(#V + #F).
+std::string extent_outlier_warning(const Positions& P, const Faces& F, const std::string& who);
 //! The words every such warning holds (for a caller that gathers warnings of nested deformers once).
 constexpr const char* kOutlierWarning = "a few outlying vertices set the bounding box";
 

@@ -43,7 +43,7 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
   // Finite coordinates can still overflow (or underflow) the squared areas computed from them at sizes
   // around 1e±150; say so rather than let a solver blame degenerate triangles.
   check_extent(P, name());
-  if (std::string outliers = extent_outlier_warning(P, name()); !outliers.empty())
+  if (std::string outliers = extent_outlier_warning(P, F, name()); !outliers.empty())
     prepare_warnings_.push_back(std::move(outliers));
   if (surface && F.rows() == 0)
     throw InvalidInput(name() + ": a surface method needs triangles, and the input has none");

@@ -155,7 +155,11 @@ std::string verdict_summary(const std::vector<MethodResult>& results, const std:
           << assessments[i].reason << "; " << fmt("%.3g", results[i].frame_ms) << " ms per frame)";
         any_best = true;
       }
-    if (!any_best) s << " no usable result (every method failed, broke or could not be judged)";
+    const bool any_unjudged = std::any_of(ids.begin(), ids.end(),
+                                          [&](size_t i) { return assessments[i].verdict == Verdict::NotJudged; });
+    if (!any_best)
+      s << (any_unjudged ? " no result could be judged (see not-judged below: no quality measure for this input)"
+                         : " no usable result (every method failed or broke)");
     s << "\n";
     for (Verdict v :
          {Verdict::Good, Verdict::Fair, Verdict::Poor, Verdict::Broken, Verdict::NotJudged, Verdict::Failed}) {

@@ -45,6 +45,7 @@ void CameraOptions::apply(const Positions& P, const Region& region, RenderOption
     const std::string el_text = comma == std::string::npos ? "" : view.substr(comma + 1);
     const double az = std::strtod(az_text.c_str(), &end_az), el = std::strtod(el_text.c_str(), &end_el);
     if (comma == std::string::npos || az_text.empty() || el_text.empty() || *end_az || *end_el ||
+        view.find_first_of("xX") != std::string::npos ||  // strtod reads C's hexadecimal numbers
         !std::isfinite(az) || !std::isfinite(el) || std::abs(el) >= 90)
       throw InvalidInput("--view " + view + ": expected auto or AZ,EL in degrees with |EL| < 90");
     o.view_direction = axes.direction(az, el);

@@ -8,7 +8,6 @@
 
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/errors.h"
-#include "msdeform/core/extent.h"
 #include "msdeform/core/mesh_io.h"
 
 namespace msd::cli {
@@ -227,7 +226,24 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
     if (!vertices.empty()) centroid[k] /= static_cast<double>(vertices.size());
   }
   int current = -1;  // the handle the next transforms move; -1: all of them
-  std::vector<double> turned(nh, 0.0);  // degrees each handle's rotations add up to
+  // A handle's transform is a matrix: it keeps a rotation only up to whole turns, so 190° would be the −170°
+  // transform and ±180° the same one, and methods that blend rotations (propagate, gradient, ARAP's start)
+  // would turn the other way round. Each handle's turns (in absolute value) must stay below half a turn.
+  std::vector<double> turned(nh, 0.0);
+  const auto add_turn = [&](double degrees, const std::string& option) {
+    for (int k = (current < 0 ? 0 : current); k < (current < 0 ? nh : current + 1); ++k) {
+      turned[k] += degrees;
+      if (!(turned[k] < 180)) {
+        char total[32];
+        std::snprintf(total, sizeof total, "%.7g", turned[k]);
+        throw InvalidInput(option + ": the turns of handle " + std::to_string(k) + " add up to " + total +
+                           " degrees, half a turn or more. A handle's transform is a matrix, which keeps a rotation "
+                           "only up to whole turns (190 degrees is the transform of -170, +180 that of -180), so "
+                           "methods that blend rotations could turn the other way round; give less than 180 "
+                           "degrees in total per handle (a scale by two negative factors is a half turn)");
+      }
+    }
+  };
   const std::vector<Step> all = steps();
   for (size_t i = 0; i < all.size(); ++i) {
     const Step& s = all[i];
@@ -249,23 +265,13 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
     } else if (s.option == rotate_) {
       const auto v = numbers(option, s.value, {4}, "AX,AY,AZ,DEGREES");
       if (vec(v).squaredNorm() == 0) throw InvalidInput(option + ": the axis is zero");
-      // A handle's transform is a matrix: it keeps a rotation only up to whole turns, so 190° would be the
-      // −170° transform, and methods that blend rotations (propagate, gradient, ARAP's start) would turn
-      // the other way round. Each handle's rotations may add up to half a turn.
-      for (int k = (current < 0 ? 0 : current); k < (current < 0 ? nh : current + 1); ++k) {
-        turned[k] += std::abs(v[3]);
-        if (!(turned[k] <= 180))
-          throw InvalidInput(option + ": the rotations of handle " + std::to_string(k) + " add up to " +
-                             format_number(turned[k]) + " degrees, more than half a turn. A handle's transform "
-                             "is a matrix, which keeps a rotation only up to whole turns (190 degrees is the "
-                             "transform of -170), so methods that blend rotations would turn the shorter way, "
-                             "against the one asked for; give at most 180 degrees in total per handle");
-      }
+      add_turn(std::abs(v[3]), option);
       M.topLeftCorner<3, 3>() = Eigen::AngleAxisd(v[3] * kPi / 180, vec(v).normalized()).toRotationMatrix();
     } else {
       const auto v = numbers(option, s.value, {1, 3}, "S or SX,SY,SZ");
       const Vec3 factors = v.size() == 1 ? Vec3::Constant(v[0]) : vec(v);
       if (!(factors.array().abs() > 0).all()) throw InvalidInput(option + ": a scale factor is zero");
+      if ((factors.array() < 0).count() == 2) add_turn(180, option);  // e.g. -1,-1,1: a half turn about z
       M.topLeftCorner<3, 3>() = factors.asDiagonal();
     }
     // A rotation or scale is about the point of the --about right after it, else the handle's centroid.

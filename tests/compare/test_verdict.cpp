@@ -106,5 +106,11 @@ TEST_CASE("verdicts: the summary gives the best's verdict, and says when an edit
   CHECK(a[0].verdict == Verdict::Poor);
   const std::string summary = verdict_summary(results, a);
   CHECK_THAT(summary, Contains("cylinder: best arap (poor: details changed by 40 %"));
-  CHECK_THAT(summary, Contains("camel: no usable result (every method failed, broke or could not be judged)"));
+  CHECK_THAT(summary, Contains("camel: no usable result (every method failed or broke)"));
+  // A point cloud: the space methods' results exist but have no quality measure.
+  std::vector<MethodResult> cloud = {result("cloud", "lattice", 0, 0), result("cloud", "shell", 0, 0)};
+  cloud[0].rigidity.count = cloud[0].distortion.count = 0;
+  cloud[1].ok = false;
+  cloud[1].error = "a surface method needs triangles";
+  CHECK_THAT(verdict_summary(cloud, assess(cloud)), Contains("cloud: no result could be judged (see not-judged"));
 }

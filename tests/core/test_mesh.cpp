@@ -9,6 +9,7 @@
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/scenes.h"
 #include "test_util.h"
@@ -128,4 +129,30 @@ TEST_CASE("boundary_vertices are the ends of edges used by exactly one face, on 
   const auto side = static_cast<size_t>(std::lround(std::sqrt(static_cast<double>(plane.P.rows()))));
   REQUIRE(side * side == static_cast<size_t>(plane.P.rows()));  // the bumpy plane is a square grid
   CHECK(boundary_vertices(plane.F, static_cast<int>(plane.P.rows())).size() == 4 * (side - 1));
+}
+
+TEST_CASE("extent_outlier_warning: a few strays far in edge lengths, not a coarse cone's apex", "[core][mesh]") {
+  Positions P;
+  Faces F;
+  std::vector<bool> interior;
+  test::jittered_grid(40, 0.1, P, F, interior);  // 1600 vertices, edges about 1/39 long
+  CHECK(extent_outlier_warning(P, F, "t").empty());
+  // Two strays on the same side (one trimmed coordinate per end missed the second), 1000 away.
+  Positions strays = P;
+  strays(100, 0) += 1000;
+  strays(900, 0) += 1001;
+  const std::string w = extent_outlier_warning(strays, F, "t");
+  CHECK_THAT(w, Catch::Contains(kOutlierWarning) && Catch::Contains("vertex 900 lies"));
+  CHECK_FALSE(extent_outlier_warning(strays, Faces(), "t").empty());  // a point cloud: the box alone decides
+  // A cone of 32 ring vertices and an apex 30 away: the apex sets the box, but its edges are as long.
+  Positions cone(34, 3);
+  Faces sides(64, 3);
+  for (int i = 0; i < 32; ++i) {
+    cone.row(i) = Vec3(0, std::cos(i * 2 * std::acos(-1.0) / 32), std::sin(i * 2 * std::acos(-1.0) / 32)).transpose();
+    sides.row(i) << i, (i + 1) % 32, 32;       // to the apex
+    sides.row(32 + i) << (i + 1) % 32, i, 33;  // the base's cap
+  }
+  cone.row(32) = Vec3(30, 0, 0).transpose();
+  cone.row(33) = Vec3(0, 0, 0).transpose();
+  CHECK(extent_outlier_warning(cone, sides, "t").empty());
 }

@@ -135,7 +135,9 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   // One pair of options for both iterative methods: bound to DeformerOptions and copied into the chosen
   // method's settings by method_settings() (their defaults differ per method).
   scoped_options.clear();
-  auto* iterative = cmd.add_option_group("iterative methods", "arap, primo: iterations per frame and stopping test");
+  auto* iterative = cmd.add_option_group("iterative methods",
+                                        "arap, primo: iterations per frame and stopping test; "
+                                        "multiscale-volumes: --iterations");
   iterations_option = iterative->add_option("--iterations", iterations,
                                             "iterations per frame at most (default: arap " +
                                                 std::to_string(ArapOptions{}.max_iterations) + ", primo " +

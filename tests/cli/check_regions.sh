@@ -116,6 +116,7 @@ if [ -f "$cgal/armadillo.off" ]; then
 fi
 expect_error 1 "--up w: expected auto, x, y, z" "$msdeform" render lift.off --up w -o x.png
 expect_error 1 "--view 1: expected auto or AZ,EL" "$msdeform" render lift.off --view 1 -o x.png
+expect_error 1 "--view 0x10,10: expected auto or AZ,EL" "$msdeform" render lift.off --view 0x10,10 -o x.png  # hex
 expect_error 1 "--focus handle: the region has no handle" "$msdeform" render lift.off --focus handle -o x.png
 expect_error 1 "needs a region" "$msdeform" render lift.off --color region -o x.png
 expect_error 1 "--color bogus: not a colour mode (auto, region, detail, selfint, rigidity, none)" \

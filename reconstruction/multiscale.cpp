@@ -46,13 +46,11 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
     throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on the base B (not the "
                       "input mesh); the base is degenerate there, try a smaller detail scale: " + e.what());
   }
-  const auto said = [&](const char* words) {
-    return std::any_of(prepare_warnings_.begin(), prepare_warnings_.end(),
-                       [&](const std::string& w) { return w.find(words) != std::string::npos; });
-  };
+  // B has S's outliers: Deformer::prepare has warned about them on S already.
+  const auto about_outliers = [](const std::string& w) { return w.find(kOutlierWarning) != std::string::npos; };
+  const bool outliers_said = std::any_of(prepare_warnings_.begin(), prepare_warnings_.end(), about_outliers);
   for (const std::string& w : base_deformer_->prepare_warnings())
-    if (w.find(kOutlierWarning) == std::string::npos || !said(kOutlierWarning))  // B has S's outliers: once
-      prepare_warnings_.push_back(w);
+    if (!(outliers_said && about_outliers(w))) prepare_warnings_.push_back(w);
   encoding_->set_anchor_vertices(region.constrained_vertices());
   encoding_->set_placed_vertices(region.constrained_vertices());  // do_deform places them itself
   if (!d.base_is_input) {

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <utility>
 
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/errors.h"
@@ -226,12 +227,14 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
     if (!vertices.empty()) centroid[k] /= static_cast<double>(vertices.size());
   }
   int current = -1;  // the handle the next transforms move; -1: all of them
+  const auto moved = [&] { return current < 0 ? std::pair{0, nh} : std::pair{current, current + 1}; };  // [k0, k1)
   // A handle's transform is a matrix: it keeps a rotation only up to whole turns, so 190° would be the −170°
   // transform and ±180° the same one, and methods that blend rotations (propagate, gradient, ARAP's start)
   // would turn the other way round. Each handle's turns (in absolute value) must stay below half a turn.
   std::vector<double> turned(nh, 0.0);
   const auto add_turn = [&](double degrees, const std::string& option) {
-    for (int k = (current < 0 ? 0 : current); k < (current < 0 ? nh : current + 1); ++k) {
+    const auto [k0, k1] = moved();
+    for (int k = k0; k < k1; ++k) {
       turned[k] += degrees;
       if (!(turned[k] < 180)) {
         char total[32];
@@ -282,7 +285,8 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
       has_about = next.value != "handle-centroid";
       if (has_about) about = vec(numbers("--about " + next.value, next.value, {3}, "X,Y,Z or handle-centroid"));
     }
-    for (int k = (current < 0 ? 0 : current); k < (current < 0 ? nh : current + 1); ++k) {
+    const auto [k0, k1] = moved();
+    for (int k = k0; k < k1; ++k) {
       const Vec3 c = has_about ? about : transform_point(T[k], centroid[k]);  // where the handle is now
       Mat4 about_c = M;  // M about c: x ↦ c + A (x − c) + t
       about_c.topRightCorner<3, 1>() += c - M.topLeftCorner<3, 3>() * c;

@@ -178,4 +178,27 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
   return B;
 }
 
+Positions LowPassCache::base(const Positions& S, const Faces& F, const LowPassOptions& options,
+                             LowPassReport* report) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  const auto same = [](const LowPassOptions& a, const LowPassOptions& b) {
+    return a.detail_scale == b.detail_scale && a.max_fold_ratio == b.max_fold_ratio &&
+           a.plateau_growth == b.plateau_growth && a.max_scale_fraction == b.max_scale_fraction;
+  };
+  if (!(valid_ && same(options, options_) && S.rows() == S_.rows() && F.rows() == F_.rows() && S == S_ && F == F_)) {
+    LowPassReport r;
+    Positions B = low_pass_base(S, F, options, &r);  // throws before anything is replaced
+    valid_ = false;
+    S_ = S, F_ = F, B_ = std::move(B), options_ = options, report_ = std::move(r);
+    valid_ = true;
+    if (report) *report = report_;
+    return B_;
+  }
+  if (report) {
+    *report = report_;
+    report->reused = true;
+  }
+  return B_;
+}
+
 }  // namespace msd

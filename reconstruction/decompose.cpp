@@ -145,7 +145,8 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
   switch (o.kind) {
     case DecompositionKind::LowPass:
     case DecompositionKind::Remeshed:
-      d.base = low_pass_base(S, F, o.low_pass, &report.low_pass);  // S → B
+      d.base = o.low_pass_cache ? o.low_pass_cache->base(S, F, o.low_pass, &report.low_pass)
+                                : low_pass_base(S, F, o.low_pass, &report.low_pass);  // S → B
       report.check = report.low_pass.check;
       break;
     case DecompositionKind::Fairing: {

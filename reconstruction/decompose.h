@@ -39,6 +39,10 @@ struct DecompositionOptions {
   double remesh_edge_length = 0;
   //! Subdivision: the control mesh whose refinement S is (faces equal). Required for that kind.
   std::shared_ptr<const ControlMesh> control;
+  //! LowPass, Remeshed: where the low-pass base is kept for the next decompose() of the same mesh with the
+  //! same low_pass options, e.g. with another region (null: computed each time). Options copied from
+  //! these share it.
+  std::shared_ptr<LowPassCache> low_pass_cache;
 };
 
 //! What decompose() found.

@@ -36,6 +36,8 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
   progress(name_ + ": decomposing S into a base and details (" + to_string(options_.decomposition.kind) + " base)");
   decomposition_ = decompose(S, F, region, options_.decomposition);
   const Decomposition& d = decomposition_;
+  if (d.report.low_pass.reused)
+    progress(name_ + ": the low-pass base is the one computed before for this mesh and detail scale");
   if (!d.report.warning.empty()) prepare_warnings_.push_back(d.report.warning);
   progress(name_ + ": preparing the base deformer (" + base_deformer_->name() + ") on " +
            std::to_string(d.edit.rows()) + " base vertices");

@@ -54,6 +54,8 @@ void add_view_command(CLI::App& app) {
     o.edit = edit->load(/*need_transforms=*/def_given, /*need_region=*/def_given);
     o.method = method->method_name();
     o.settings = method->method_settings(o.edit);
+    // Painting a region prepares the method again on the same mesh: the multi-scale base is computed once.
+    o.settings.decomposition.low_pass_cache = std::make_shared<LowPassCache>();
     method->make(o.edit);  // an unknown method or invalid settings are refused before the window opens
     if (o.method == "arap" || o.method == "primo") {
       const double tolerance = o.method == "arap" ? o.settings.arap.tolerance : o.settings.primo.tolerance;

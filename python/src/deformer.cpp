@@ -586,6 +586,8 @@ PyDeformer::PyDeformer(const std::string& name, const py::kwargs& options) : met
       if (was_given(k, "cage"))
         throw py::value_error("Deformer('" + method + "'): " + k +
                               " shapes the generated cage; with cage=... the given cage is used as it is");
+  // prepare() again on the same mesh (another region) computes the multi-scale base once.
+  settings.decomposition.low_pass_cache = std::make_shared<msd::LowPassCache>();
   deformer = catalogue.make(method, settings);  // InvalidInput (a ValueError) for invalid values
 }
 

@@ -138,3 +138,43 @@ TEST_CASE("detail check: the fold ratio is height over curvature radius on a sph
   // Outward details never fold on a convex base.
   CHECK(check_details(3.0 * P, B, F).max_fold_ratio == 0);
 }
+
+TEST_CASE("low-pass cache: the same mesh and options give the stored base, any change computes anew",
+          "[decomposition][low-pass]") {
+  SceneOptions o;
+  o.resolution = 3000;
+  const Scene s = make_scene("lift", o);
+  LowPassOptions options;  // the automatic scale: several candidates
+  LowPassReport fresh_report, report;
+  const Positions fresh = low_pass_base(s.P, s.F, options, &fresh_report);
+  REQUIRE(fresh_report.detail_scale > 0);
+  LowPassCache cache;
+  CHECK(cache.base(s.P, s.F, options, &report) == fresh);
+  CHECK_FALSE(report.reused);
+  CHECK(cache.base(s.P, s.F, options, &report) == fresh);
+  CHECK(report.reused);
+  CHECK(report.detail_scale == fresh_report.detail_scale);
+  CHECK(report.candidates.size() == fresh_report.candidates.size());
+
+  // One coordinate, the faces, or an option changed: a miss, and the base of the new input.
+  Positions moved = s.P;
+  moved(17, 2) += 1e-3;
+  CHECK(cache.base(moved, s.F, options, &report) == low_pass_base(moved, s.F, options));
+  CHECK_FALSE(report.reused);
+  Faces flipped = s.F;
+  std::swap(flipped(0, 1), flipped(0, 2));
+  CHECK(cache.base(moved, flipped, options, &report) == low_pass_base(moved, flipped, options));
+  CHECK_FALSE(report.reused);
+  LowPassOptions given = options;
+  given.detail_scale = 0.2;
+  CHECK(cache.base(moved, flipped, given, &report) == low_pass_base(moved, flipped, given));
+  CHECK_FALSE(report.reused);
+  CHECK(report.detail_scale == 0.2);
+
+  // A failed call keeps the stored base.
+  given.detail_scale = -1;
+  CHECK_THROWS_AS(cache.base(moved, flipped, given), InvalidInput);
+  given.detail_scale = 0.2;
+  cache.base(moved, flipped, given, &report);
+  CHECK(report.reused);
+}

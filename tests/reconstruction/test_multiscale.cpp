@@ -393,3 +393,34 @@ TEST_CASE("progress: prepare reports its phases and an iterative base deformer i
   ms.deform(s.transforms, out);
   CHECK(lines.empty());
 }
+
+TEST_CASE("multiscale: prepared again with another region, the base is reused and the edit is a fresh one's",
+          "[reconstruction][multiscale]") {
+  const Scene s = scene("lift");
+  // The second region: the handle widened by the free vertices within 0.05 of it.
+  std::vector<int> codes(s.P.rows());
+  for (Eigen::Index v = 0; v < s.P.rows(); ++v) codes[v] = s.region.code(static_cast<int>(v));
+  const std::vector<int> handle = s.region.handle_vertices(0);
+  for (int v : s.region.free_vertices())
+    for (int h : handle)
+      if ((s.P.row(v) - s.P.row(h)).norm() < 0.05) {
+        codes[v] = s.region.code(h);
+        break;
+      }
+  const Region wider = Region::from_codes(codes);
+  REQUIRE(wider.handle_vertices(0).size() > s.region.handle_vertices(0).size());
+  MultiscaleOptions o;
+  o.decomposition.low_pass_cache = std::make_shared<LowPassCache>();
+  MultiscaleDeformer ms(o);
+  std::vector<std::string> phases;
+  ms.set_progress([&](const std::string& line) { phases.push_back(line); });
+  ms.prepare(s.P, s.F, s.region);
+  CHECK_FALSE(ms.decomposition_report().low_pass.reused);
+  ms.prepare(s.P, s.F, wider);
+  CHECK(ms.decomposition_report().low_pass.reused);
+  CHECK(std::any_of(phases.begin(), phases.end(), [](const std::string& p) { return p.find("computed before") != std::string::npos; }));
+  MultiscaleDeformer fresh;  // no cache
+  fresh.prepare(s.P, s.F, wider);
+  CHECK(ms.base() == fresh.base());
+  CHECK(ms.deform(s.transforms) == fresh.deform(s.transforms));
+}

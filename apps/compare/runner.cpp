@@ -6,9 +6,11 @@
 #include <exception>
 #include <memory>
 #include <optional>
+#include <utility>
 
 #include "msdeform/analysis/self_intersections.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 
 namespace msd {
 namespace {
@@ -69,6 +71,7 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
   std::vector<MethodResult> results;
   // The multi-scale encodings decompose this mesh alike: the low-pass base is computed once.
   const auto low_pass_cache = std::make_shared<LowPassCache>();
+  bool outliers_said = false;
   for (const auto& method : options.methods) {
     MethodResult r;
     r.scene = edit.name;
@@ -103,7 +106,11 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
       r.folded_faces = report.folded_faces;
       r.iterations = report.iterations;
       for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
-        for (const std::string& w : *list) r.warning += (r.warning.empty() ? "" : "; ") + w;
+        for (const std::string& w : *list) {
+          // Stray vertices are the input's: said by the first method that ran, not by each.
+          if (w.find(kOutlierWarning) != std::string::npos && std::exchange(outliers_said, true)) continue;
+          r.warning += (r.warning.empty() ? "" : "; ") + w;
+        }
       if (!r.result.allFinite()) throw Error(method + " returned a non-finite position");
       r.handle_error = handle_error(rest, r.result, edit.region, edit.transforms);
       r.ok = true;

@@ -3,6 +3,7 @@
 
 #include "apps/msdeform/camera_options.h"
 #include "apps/msdeform/commands.h"
+#include "apps/msdeform/deformers.h"
 #include "apps/msdeform/edit_case.h"
 #include "msdeform/analysis/metrics.h"
 #include "msdeform/analysis/self_intersections.h"
@@ -34,7 +35,7 @@ void add_render_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--rest", *rest, "--color rigidity: the rest shape (same vertices and faces, e.g. the input of deform)");
   cmd->add_option("--detail-scale", *detail_scale, "--color detail: the low-pass detail scale (0: automatic)")
-      ->check(CLI::Range(0.0, 1e300));
+      ->check(nonnegative_length());
   cmd->add_option("--size", *size, "Width and height in pixels")->expected(2)->check(CLI::Range(16, 8192));
   cmd->add_option("-o,--output", *output, "PNG to write (atomically)")->required();
   cmd->callback([=] {

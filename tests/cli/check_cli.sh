@@ -75,6 +75,9 @@ grep -q "building scene" err.txt && fail "compare built scenes before refusing -
 # A resolution is decimal (0x10 was read as hexadecimal 16).
 expect_error 2 "resolution '0x10'" "$msdeform" scene lift --resolution 0x10 -o .
 expect_error 2 "resolution ' 100'" "$msdeform" scene lift --resolution " 100" -o .
+# A length out of range is named, not compared against a bound printed with 300 digits.
+expect_error 2 "'inf' must be a finite length >= 0" "$msdeform" render --scene lift --color detail --detail-scale inf -o x.png
+[ "$(wc -c <err.txt)" -lt 300 ] || { cat err.txt; fail "the --detail-scale message is too long"; }
 
 # compare: a run that fails makes the exit status non-zero (the pages are still written).
 printf 'OFF\n4 0 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n' >cloud.off
@@ -82,6 +85,16 @@ printf '0\n1\n1\n2\n' >cloud.sel
 printf '1 0 0 0\n0 1 0 0\n0 0 1 0.1\n0 0 0 1\n' >cloud.def
 expect_error 1 "runs failed" "$msdeform" compare --mesh cloud.off --sel cloud.sel --def cloud.def --methods shell,rbf -o cmp
 [ -s cmp/index.html ] || fail "compare wrote no index.html"
+# compare: a stray vertex is the input's fault: warned about once, not by every method.
+python3 - <<'PY' || fail "could not write the plane with a stray vertex"
+lines = open("lift.off").read().split("\n")
+x = lines[2].split()
+x[2] = str(float(x[2]) + 1e6)
+lines[2] = " ".join(x)
+open("stray.off", "w").write("\n".join(lines))
+PY
+"$msdeform" compare --mesh stray.off --sel lift.sel --def lift.def --methods shell,gradient -o cmp-stray >/dev/null 2>err.txt
+[ "$(grep -c "a few outlying vertices" err.txt)" = 1 ] || { cat err.txt; fail "compare did not warn of the stray vertex once"; }
 
 # Seams: the plane with its right half on its own copies of the cut's vertices.
 python3 - <<'PY' || fail "could not write the split plane"

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "apps/msdeform/commands.h"
 #include "msdeform/core/atomic_file.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh_io.h"
@@ -40,15 +41,11 @@ void CameraOptions::apply(const Positions& P, const Region& region, RenderOption
     o.view_direction = axes.default_direction();
   } else {
     const size_t comma = view.find(',');
-    char *end_az = nullptr, *end_el = nullptr;
-    const std::string az_text = view.substr(0, comma);
-    const std::string el_text = comma == std::string::npos ? "" : view.substr(comma + 1);
-    const double az = std::strtod(az_text.c_str(), &end_az), el = std::strtod(el_text.c_str(), &end_el);
-    if (comma == std::string::npos || az_text.empty() || el_text.empty() || *end_az || *end_el ||
-        view.find_first_of("xX") != std::string::npos ||  // strtod reads C's hexadecimal numbers
-        !std::isfinite(az) || !std::isfinite(el) || std::abs(el) >= 90)
+    const std::optional<double> az = cli::decimal_number(view.substr(0, comma)),
+                                el = comma == std::string::npos ? std::nullopt : cli::decimal_number(view.substr(comma + 1));
+    if (!az || !el || std::abs(*el) >= 90)
       throw InvalidInput("--view " + view + ": expected auto or AZ,EL in degrees with |EL| < 90");
-    o.view_direction = axes.direction(az, el);
+    o.view_direction = axes.direction(*az, *el);
   }
   if (focus == "handle") {
     if (region.num_handles() == 0) throw InvalidInput("--focus handle: the region has no handle");

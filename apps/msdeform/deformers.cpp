@@ -6,6 +6,7 @@
 #include <map>
 #include <sstream>
 
+#include "apps/msdeform/commands.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh_io.h"
 
@@ -28,11 +29,8 @@ std::string compact(double x) {
 CLI::Validator nonnegative_length() {
   return CLI::Validator(
       [](std::string& text) -> std::string {
-        char* end = nullptr;
-        const double x = std::strtod(text.c_str(), &end);
-        if (text.empty() || *end != '\0') return "'" + text + "' is not a number";
-        if (!std::isfinite(x) || x < 0) return "'" + text + "' must be a finite length >= 0";
-        return {};
+        const std::optional<double> x = decimal_number(text);
+        return x && *x >= 0 ? std::string() : "'" + text + "' must be a finite length >= 0";
       },
       "LENGTH>=0");
 }

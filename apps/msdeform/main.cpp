@@ -21,10 +21,7 @@ namespace {
 void add_common_checks(CLI::App& app) {
   const CLI::Validator finite(
       [](std::string& text) -> std::string {
-        const double x = std::strtod(text.c_str(), nullptr);
-        if (!std::isfinite(x)) return "'" + text + "' is not a finite number";
-        if (text.find_first_of("xX") != std::string::npos) return "'" + text + "' is not a decimal number";
-        return {};
+        return msd::cli::decimal_number(text) ? std::string() : "'" + text + "' is not a finite decimal number";
       },
       "", "finite decimal");
   const CLI::Validator resolution(
@@ -45,6 +42,15 @@ void add_common_checks(CLI::App& app) {
 }
 
 }  // namespace
+
+std::optional<double> msd::cli::decimal_number(const std::string& text) {
+  char* end = nullptr;
+  const double x = std::strtod(text.c_str(), &end);  // overflow gives ±inf; underflow a finite tiny value
+  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(x) ||
+      text.find_first_of("xX") != std::string::npos)
+    return std::nullopt;
+  return x;
+}
 
 int main(int argc, char** argv) {
   msd::retain_freed_memory();

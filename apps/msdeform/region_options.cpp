@@ -7,6 +7,7 @@
 #include <map>
 #include <utility>
 
+#include "apps/msdeform/commands.h"
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh_io.h"
@@ -25,13 +26,9 @@ std::vector<double> numbers(const std::string& where, const std::string& text, s
   while (true) {
     const size_t comma = text.find(',', at);
     const std::string item = text.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
-    char* end = nullptr;
-    const double x = std::strtod(item.c_str(), &end);  // overflow gives ±inf; underflow a finite tiny value
-    // strtod also reads C's hexadecimal numbers: 0x10 is not the 0 or 10 a user meant.
-    const bool decimal = item.find_first_of("xX") == std::string::npos;
-    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(x) || !decimal)
-      throw InvalidInput(where + ": '" + item + "' is not a finite decimal number (expected " + what + ")");
-    out.push_back(x);
+    const std::optional<double> x = cli::decimal_number(item);
+    if (!x) throw InvalidInput(where + ": '" + item + "' is not a finite decimal number (expected " + what + ")");
+    out.push_back(*x);
     if (comma == std::string::npos) break;
     at = comma + 1;
   }

@@ -49,8 +49,8 @@ expect_error 2 "--bogus" "$msdeform" deform --scene lift --bogus -o x.off
 mkdir -p out-folder
 expect_error 1 "out-folder is a folder; give a mesh file name" "$msdeform" deform --scene lift -o out-folder
 # NaN passed CLI11's ranges and reached the library (exit 1); every floating-point option refuses it now.
-expect_error 2 "--tolerance: 'nan' is not a finite number" "$msdeform" deform --scene lift --method arap --tolerance nan -o x.off
-expect_error 2 "'0x1p-3' is not a decimal number" "$msdeform" deform --scene lift --method arap --tolerance 0x1p-3 -o x.off
+expect_error 2 "--tolerance: 'nan' is not a finite decimal number" "$msdeform" deform --scene lift --method arap --tolerance nan -o x.off
+expect_error 2 "'0x1p-3' is not a finite decimal number" "$msdeform" deform --scene lift --method arap --tolerance 0x1p-3 -o x.off
 expect_error 2 "resolution '1': expected a vertex count from 16" "$msdeform" scene lift --resolution 1 -o x
 expect_error 2 "--encoding: foo not in {vectors,normal,volumes,transfer}" \
   "$msdeform" deform --scene lift --method multiscale --encoding foo -o x.off
@@ -128,7 +128,7 @@ grep -q "split along seams" err.txt || fail "no seam warning"
 "$msdeform" deform split.off --sel split.sel --def lift.def --method shell --weld 0 -o welded.off >out.txt 2>err.txt ||
   { cat err.txt; fail "deform --weld 0"; }
 grep -q "welded" out.txt || fail "--weld printed nothing"
-expect_error 2 "--weld: 'nan' is not a finite number" "$msdeform" deform split.off --sel split.sel \
+expect_error 2 "--weld: 'nan' is not a finite decimal number" "$msdeform" deform split.off --sel split.sel \
   --def lift.def --method shell --weld nan -o nan.off
 grep -q "split along seams" err.txt && fail "a seam warning after welding"
 [ "$(sed -n 2p welded.off | cut -d' ' -f1)" = "$(sed -n 2p split.off | cut -d' ' -f1)" ] ||

@@ -431,7 +431,9 @@ void Viewer::finish_prepare(bool wait) {
   // An iterative method prepared again (a region painted, another method) goes on from the shape shown.
   if (deformer_->traits().initial_guess && X_.rows() == edit_.P.rows() && X_ != edit_.P) deformer_->set_initial_guess(X_);
   prepare_ms_ = r.ms;
-  status("prepared " + method_ + " in " + std::to_string(static_cast<int>(prepare_ms_)) + " ms");
+  const auto* ms = dynamic_cast<const MultiscaleDeformer*>(deformer_.get());
+  status("prepared " + method_ + " in " + std::to_string(static_cast<int>(prepare_ms_)) + " ms" +
+         (ms && ms->decomposition_report().low_pass.reused ? " (the multi-scale base computed before)" : ""));
   for (const std::string& w : deformer_->prepare_warnings()) status("warning: " + w);
   needs_frame_ = true;
 }

@@ -178,6 +178,14 @@ assert change < 0.02, f"painting a handle moved the shape by {change}"
 EOF2
   fail "the saved shape is not the one shown"
 
+# Painting prepares the method again on the same mesh: the multi-scale base is computed once.
+printf 'translate 0 0 0.1\npaint handle 1 450 350 30\ntranslate 0 0 0.1\n' >paint-ms.txt
+"${run_view[@]}" lift.off --sel lift.sel --method multiscale --size 1000 700 --script paint-ms.txt \
+  --screenshot painted-ms.png >out.txt 2>err.txt || { cat out.txt err.txt; fail "painting with multiscale"; }
+[ "$(grep -c "prepared multiscale-normal" out.txt)" = 2 ] || { cat out.txt; fail "multiscale was not prepared twice"; }
+grep -q "prepared multiscale-normal in [0-9]* ms (the multi-scale base computed before)" out.txt ||
+  { cat out.txt; fail "the second preparation computed the base again"; }
+
 # 5. Bad scripts and inputs: refused by name before a window opens, or at the command that fails.
 expect_error 1 "/dev/zero: cannot open the script (not a file)" "${run_view[@]}" lift.off --script /dev/zero
 printf 'translate 0 0 1 0\n' >bad.txt

@@ -181,6 +181,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
 Positions LowPassCache::base(const Positions& S, const Faces& F, const LowPassOptions& options,
                              LowPassReport* report) {
   const std::lock_guard<std::mutex> lock(mutex_);
+  static_assert(sizeof(LowPassOptions) == 4 * sizeof(double), "a new option must be compared here too");
   const auto same = [](const LowPassOptions& a, const LowPassOptions& b) {
     return a.detail_scale == b.detail_scale && a.max_fold_ratio == b.max_fold_ratio &&
            a.plateau_growth == b.plateau_growth && a.max_scale_fraction == b.max_scale_fraction;

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <utility>
 
@@ -111,7 +112,8 @@ double diameter(const Positions& S) {
 
 }  // namespace
 
-Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions& options, LowPassReport* report) {
+Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions& options, LowPassReport* report,
+                        const std::function<void(const std::string&)>& progress) {
   const auto t0 = std::chrono::steady_clock::now();
   check_mesh_arrays(S, F, kWho);
   if (F.rows() == 0) throw InvalidInput(std::string(kWho) + ": the mesh has no faces");
@@ -151,12 +153,26 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
     const double area = face_areas(S, F).sum();
     const long allowed_folds = static_cast<long>(kDefectFraction * static_cast<double>(S.rows()));
     double previous_rms = 0;
-    for (int k = 0; smallest * std::pow(std::sqrt(2.0), k) <= largest; ++k) {
+    int most = 0;  // candidates up to the largest scale (none when every edge has zero length)
+    while (smallest > 0 && smallest * std::pow(std::sqrt(2.0), most) <= largest) ++most;
+    for (int k = 0; k < most; ++k) {
+      const auto started = std::chrono::steady_clock::now();
       const double L = smallest * std::pow(std::sqrt(2.0), k);
       Positions trial = system.solve(L);
       const DetailCheck check = check_details(S, trial, F);
       const double area_ratio = face_areas(trial, F).sum() / area;
       r.candidates.push_back({L, check, area_ratio});
+      if (progress) {
+        char growth[96] = "";
+        if (k > 0)
+          std::snprintf(growth, sizeof growth, ", x%.3g of the last (a plateau: below x%.3g)",
+                        check.rms_height / previous_rms, options.plateau_growth);
+        char line[256];
+        std::snprintf(line, sizeof line, "detail scale candidate %d of at most %d: %.4g, rms detail height %.4g%s, %.1f s",
+                      k + 1, most, L, check.rms_height, growth,
+                      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+        progress(line);
+      }
       if (check.fold_ratio_p999 > options.max_fold_ratio || check.folding_vertices > allowed_folds ||
           area_ratio < kMinAreaRatio)
         break;  // from here on the base loses the shape, not just the details
@@ -179,7 +195,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
 }
 
 Positions LowPassCache::base(const Positions& S, const Faces& F, const LowPassOptions& options,
-                             LowPassReport* report) {
+                             LowPassReport* report, const std::function<void(const std::string&)>& progress) {
   const std::lock_guard<std::mutex> lock(mutex_);
   static_assert(sizeof(LowPassOptions) == 4 * sizeof(double), "a new option must be compared here too");
   const auto same = [](const LowPassOptions& a, const LowPassOptions& b) {
@@ -188,7 +204,7 @@ Positions LowPassCache::base(const Positions& S, const Faces& F, const LowPassOp
   };
   if (!(valid_ && same(options, options_) && S.rows() == S_.rows() && F.rows() == F_.rows() && S == S_ && F == F_)) {
     LowPassReport r;
-    Positions B = low_pass_base(S, F, options, &r);  // throws before anything is replaced
+    Positions B = low_pass_base(S, F, options, &r, progress);  // throws before anything is replaced
     valid_ = false;
     S_ = S, F_ = F, B_ = std::move(B), options_ = options, report_ = std::move(r);
     valid_ = true;

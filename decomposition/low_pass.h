@@ -18,7 +18,9 @@
 //! surface's, and a free outline curls, so that S's outline vertices found no base point along the normals
 //! (measured: 104 of them on the 10k bumpy plane). M̃⁻¹ is also zero on vertices without area.
 
+#include <functional>
 #include <mutex>
+#include <string>
 #include <vector>
 
 #include "msdeform/core/types.h"
@@ -76,10 +78,13 @@ struct LowPassReport {
 //! equals its base deformer. The search stops early where a candidate would remove shape: its details
 //! come close to folding (max_fold_ratio) or its area falls below half of S's (a tube smoothed towards
 //! its axis, which a plateau would otherwise follow once nothing is left).
+//! progress, when given, receives a line per candidate of the automatic choice (its scale, rms detail
+//! height and growth, seconds): each costs a factorisation, minutes in all at 1M vertices.
 //! \throw InvalidInput for an index out of range, a non-finite position, no faces, or options out of
 //! range; SolverError naming the vertex if the system cannot be factored.
 Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions& options = {},
-                        LowPassReport* report = nullptr);
+                        LowPassReport* report = nullptr,
+                        const std::function<void(const std::string&)>& progress = {});
 
 //! The last low-pass base computed, for callers that prepare several deformers on one mesh: the viewer
 //! preparing again whenever a region is painted, a script trying regions, `compare` running the four
@@ -93,7 +98,7 @@ class LowPassCache {
   //! computed call's exactly (then report->reused is true). Errors as low_pass_base(); a failed call
   //! leaves the stored base as it was.
   Positions base(const Positions& S, const Faces& F, const LowPassOptions& options = {},
-                 LowPassReport* report = nullptr);
+                 LowPassReport* report = nullptr, const std::function<void(const std::string&)>& progress = {});
 
  private:
   std::mutex mutex_;

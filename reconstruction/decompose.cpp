@@ -127,7 +127,8 @@ DecompositionKind decomposition_kind(const std::string& name) {
   throw InvalidInput("unknown decomposition '" + name + "' (known: low-pass, fairing, remeshed, subdivision)");
 }
 
-Decomposition decompose(const Positions& S, const Faces& F, const Region& region, const DecompositionOptions& o) {
+Decomposition decompose(const Positions& S, const Faces& F, const Region& region, const DecompositionOptions& o,
+                        const std::function<void(const std::string&)>& progress) {
   check_mesh_arrays(S, F, "decompose");
   check_extent(S, "decompose");
   if (region.num_vertices() != S.rows())
@@ -145,8 +146,8 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
   switch (o.kind) {
     case DecompositionKind::LowPass:
     case DecompositionKind::Remeshed:
-      d.base = o.low_pass_cache ? o.low_pass_cache->base(S, F, o.low_pass, &report.low_pass)
-                                : low_pass_base(S, F, o.low_pass, &report.low_pass);  // S → B
+      d.base = o.low_pass_cache ? o.low_pass_cache->base(S, F, o.low_pass, &report.low_pass, progress)
+                                : low_pass_base(S, F, o.low_pass, &report.low_pass, progress);  // S → B
       report.check = report.low_pass.check;
       break;
     case DecompositionKind::Fairing: {

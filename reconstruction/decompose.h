@@ -3,6 +3,7 @@
 //! B of one of four kinds, the mesh the base deformer edits with the region on it, and the checks of the
 //! details against the base. `msdeform decompose` and MultiscaleDeformer both use decompose().
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -87,6 +88,8 @@ struct Decomposition {
 //! TopologyError when the base lost the shape (area_ratio < 0.5) or the details fold at rest on more than
 //! 0.1 % of the vertices, naming a vertex, the height, the radius and a remedy; as low_pass_base(),
 //! fair_region(), remesh_isotropic() and SubdivisionHierarchy::build().
-Decomposition decompose(const Positions& S, const Faces& F, const Region& region, const DecompositionOptions& options = {});
+//! progress, when given, receives the low-pass base's line per candidate of its automatic scale.
+Decomposition decompose(const Positions& S, const Faces& F, const Region& region, const DecompositionOptions& options = {},
+                        const std::function<void(const std::string&)>& progress = {});
 
 }  // namespace msd

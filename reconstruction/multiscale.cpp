@@ -34,7 +34,9 @@ DeformerTraits MultiscaleDeformer::traits() const {
 
 void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Region& region) {
   progress(name_ + ": decomposing S into a base and details (" + to_string(options_.decomposition.kind) + " base)");
-  decomposition_ = decompose(S, F, region, options_.decomposition);
+  std::function<void(const std::string&)> said;
+  if (progress_wanted()) said = [this](const std::string& line) { progress(name_ + ": " + line); };
+  decomposition_ = decompose(S, F, region, options_.decomposition, said);
   const Decomposition& d = decomposition_;
   if (d.report.low_pass.reused)
     progress(name_ + ": the low-pass base is the one computed before for this mesh and detail scale");

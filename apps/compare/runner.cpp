@@ -68,6 +68,15 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
   // CGAL's count needs a manifold, consistently oriented surface, which depends on the faces alone: once
   // it has refused them, it is not asked again.
   std::string self_intersections_refused;
+  // A scan may intersect itself already: a result is judged by the pairs the edit added.
+  std::vector<std::pair<int, int>> rest_pairs;  // (f, g), f < g, sorted
+  if (options.self_intersections && has_faces) {
+    try {
+      count_self_intersections(rest, F, &rest_pairs);
+    } catch (const InvalidInput& e) {
+      self_intersections_refused = e.what();
+    }
+  }
   std::vector<MethodResult> results;
   // The multi-scale encodings decompose this mesh alike: the low-pass base is computed once.
   const auto low_pass_cache = std::make_shared<LowPassCache>();
@@ -131,8 +140,14 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
         if (self_intersections_refused.empty()) {
           try {
             std::vector<std::pair<int, int>> pairs;
-            r.self_intersections = count_self_intersections(r.result, F, &pairs);
-            for (const auto& [f, g] : pairs) r.self_intersecting_faces.push_back(f), r.self_intersecting_faces.push_back(g);
+            count_self_intersections(r.result, F, &pairs);
+            r.self_intersections = 0;
+            r.rest_self_intersections = static_cast<int>(rest_pairs.size());
+            for (const auto& [f, g] : pairs) {
+              if (std::binary_search(rest_pairs.begin(), rest_pairs.end(), std::pair{f, g})) continue;
+              ++r.self_intersections;
+              r.self_intersecting_faces.push_back(f), r.self_intersecting_faces.push_back(g);
+            }
           } catch (const InvalidInput& e) {
             self_intersections_refused = e.what();  // the faces, as the result is finite: so for every result
           } catch (const std::exception& e) {
@@ -197,6 +212,8 @@ std::vector<Column> columns() {
       {"distortion_p95", measured([=](const MethodResult& r) { return stat(r.distortion, r.distortion.p95); })},
       {"distortion_max", measured([=](const MethodResult& r) { return stat(r.distortion, r.distortion.max); })},
       {"self_intersections", measured([=](const MethodResult& r) { return count(r.self_intersections); })},
+      {"rest_self_intersections",
+       measured([=](const MethodResult& r) { return count(r.self_intersections < 0 ? -1 : r.rest_self_intersections); })},
       // Multi-scale methods count the triangles that folded over the deformed base; others do not (n/a).
       {"folded_faces", measured([=](const MethodResult& r) { return count(r.folded_faces); })},
       {"volume_change", measured([=](const MethodResult& r) { return r.volume_change ? g(*r.volume_change) : std::string("n/a"); })},

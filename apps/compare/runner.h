@@ -28,8 +28,10 @@ struct MethodResult {
   Stats rigidity;
   //! Detail distortion, relative to the largest detail height; count 0 when not measured.
   Stats distortion;
-  int self_intersections = -1;          //!< intersecting face pairs (-1: not measured)
-  std::vector<int> self_intersecting_faces;  //!< the faces of those pairs (rows of F, a face once per pair)
+  //! Intersecting face pairs the edit added: pairs that do not intersect in the input (-1: not measured).
+  int self_intersections = -1;
+  int rest_self_intersections = 0;      //!< intersecting face pairs of the input itself (not counted above)
+  std::vector<int> self_intersecting_faces;  //!< the faces of the added pairs (rows of F, a face once per pair)
   int folded_faces = -1;                //!< the method's own frame check (FrameReport; -1: not measured)
   int iterations = 0;                   //!< iterative methods: iterations of the last frame (FrameReport)
   std::string warning;                  //!< what the method warned about (prepare and frame warnings)

@@ -82,14 +82,18 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
       }
       if (broken(r)) {
         a.verdict = Verdict::Broken;
-        if (r.self_intersections > 0) a.reason = std::to_string(r.self_intersections) + " self-intersecting triangle pairs";
+        if (r.self_intersections > 0)
+          a.reason = std::to_string(r.self_intersections) + " self-intersecting triangle pairs" +
+                     (r.rest_self_intersections > 0
+                          ? " besides the input's own " + std::to_string(r.rest_self_intersections)
+                          : std::string());
         if (r.folded_faces > 0)
           a.reason += (a.reason.empty() ? "" : "; ") + std::to_string(r.folded_faces) + " triangles folded over the base";
         continue;
       }
       std::vector<std::string> poor, fair, good;
-      if (r.rigidity.count > 0 && best_rigidity > 0 && std::isfinite(best_rigidity)) {
-        const double ratio = r.rigidity.mean / best_rigidity;
+      if (r.rigidity.count > 0 && std::isfinite(best_rigidity)) {
+        const double ratio = r.rigidity.mean / std::max(best_rigidity, t.rigid_floor);
         const std::string times = fmt(ratio < 10 ? "%.2g" : "%.0f", ratio);
         // Relative to the unbroken results only: a broken one may well be more rigid (ARAP through itself).
         const std::string text =
@@ -97,8 +101,9 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         if (ratio > t.poor_rigidity) poor.push_back(text);
         else if (ratio > t.fair_rigidity) fair.push_back(text);
         else
-          good.push_back(ratio <= 1 ? "the most rigid unbroken result"
-                                    : "rigid (" + fmt("%.2g", ratio) + "× the most rigid unbroken result)");
+          good.push_back(r.rigidity.mean <= t.rigid_floor ? "rigid (rigidity error " + fmt("%.2g", r.rigidity.mean) + ")"
+                         : ratio <= 1                   ? "the most rigid unbroken result"
+                                  : "rigid (" + fmt("%.2g", ratio) + "× the most rigid unbroken result)");
       }
       if (r.distortion.count > 0) {
         const double d = r.distortion.mean;

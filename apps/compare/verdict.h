@@ -18,6 +18,9 @@ const char* to_string(Verdict v);
 //! result of the same edit, detail distortion (|Δh| over the largest detail height) absolutely.
 struct VerdictThresholds {
   double fair_rigidity = 2, poor_rigidity = 4;         //!< × the edit's best rigidity
+  //! Rigidity means below this are rigid whatever the ratios (a uniform 0.1 % stretch reads 1e-6; a rigid
+  //! motion reads 1e-31 to 1e-22 from rounding): ratios are taken against at least this.
+  double rigid_floor = 1e-6;
   double fair_distortion = 0.10, poor_distortion = 0.25;  //!< of the largest detail height
 };
 

@@ -214,7 +214,7 @@ std::string verdicts_html(const std::vector<MethodResult>& results, const std::v
        "<span class=\"good\">good</span>, <span class=\"fair\">fair</span> (rigidity over "
     << t.fair_rigidity << "× the edit's most rigid unbroken result, or details changed by over " << 100 * t.fair_distortion
     << " % of their height), <span class=\"poor\">poor</span> (over " << t.poor_rigidity << "×, or "
-    << 100 * t.poor_distortion << " %), <span class=\"broken\">broken</span> (self-intersecting triangles, or "
+    << 100 * t.poor_distortion << " %), <span class=\"broken\">broken</span> (self-intersecting triangles the edit added, or "
        "triangles folded over a multi-scale base), <span class=\"not-judged\">not judged</span> (no rigidity or "
        "detail measure, e.g. a point cloud), <span class=\"failed\">failed</span> (with its message); a method "
        "that warned (e.g. did not converge) is at most fair, and says why. "
@@ -307,7 +307,7 @@ std::string index_html(const std::vector<MethodResult>& results, const std::vect
     h << "</table>\n";
   }
   h << "<p>Columns with the same value in every row of an edit are left out (all are in metrics.csv). rigidity: one-ring rotation residual (0 = locally rigid); distortion: |Δh| / max detail "
-       "height; self_intersections: intersecting face pairs (CGAL); reference_max / reference_mean: vertex distance to "
+       "height; self_intersections: intersecting face pairs (CGAL) the edit added, rest_self_intersections: the input's own; reference_max / reference_mean: vertex distance to "
        "the reference method's result over its bounding-box diagonal.</p>\n</body></html>\n";
   return h.str();
 }
@@ -431,6 +431,10 @@ void add_compare_command(CLI::App& app) {
         std::fprintf(stderr, "%s: %zu vertices, %zu methods\n", c.name.c_str(), size_t(c.P.rows()), options.methods.size());
       options.settings = settings[i];
       std::vector<MethodResult> results = compare_methods(c, options);
+      if (const auto it = std::find_if(results.begin(), results.end(), [](const MethodResult& r) { return r.rest_self_intersections > 0; });
+          it != results.end())
+        std::fprintf(stderr, "note: %s: the input itself has %d self-intersecting triangle pairs; each result counts the pairs "
+                     "its edit added\n", c.name.c_str(), it->rest_self_intersections);
       for (const MethodResult& r : results)  // on the page too; printed even with --quiet, as deform does
         if (r.ok && !r.warning.empty())
           std::fprintf(stderr, "warning: %s / %s: %s\n", r.scene.c_str(), r.method.c_str(), r.warning.c_str());

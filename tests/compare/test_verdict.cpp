@@ -3,7 +3,9 @@
 #include <string>
 #include <vector>
 
+#include "apps/compare/runner.h"
 #include "apps/compare/verdict.h"
+#include "msdeform/core/edit_case.h"
 
 using namespace msd;
 using Catch::Matchers::Contains;
@@ -113,4 +115,58 @@ TEST_CASE("verdicts: the summary gives the best's verdict, and says when an edit
   cloud[1].ok = false;
   cloud[1].error = "a surface method needs triangles";
   CHECK_THAT(verdict_summary(cloud, assess(cloud)), Contains("cloud: no result could be judged (see not-judged"));
+}
+
+TEST_CASE("verdicts: rigidity errors at rounding level are rigid, not hundreds of times the best",
+          "[compare][verdict]") {
+  // homer turned rigidly as a whole: shell 1.9e-31, gradient 1e-28, RBF 1.5e-22 were called poor (542×,
+  // 43653×) by ratios of rounding noise.
+  const std::vector<MethodResult> results = {result("turn", "shell", 1.9e-31, 0), result("turn", "gradient", 1e-28, 0),
+                                             result("turn", "rbf", 1.5e-22, 0), result("turn", "laplacian", 5e-6, 0)};
+  const std::vector<Assessment> a = assess(results);
+  for (int i : {0, 1, 2}) {
+    INFO(results[i].method << ": " << a[i].reason);
+    CHECK(a[i].verdict == Verdict::Good);
+    CHECK_THAT(a[i].reason, Contains("rigid (rigidity error"));
+  }
+  CHECK(a[3].verdict == Verdict::Poor);  // 5× the floor: a measurable stretch
+  CHECK_THAT(a[3].reason, Contains("rigidity 5× the edit's most rigid unbroken result"));
+}
+
+TEST_CASE("compare: a result is broken by the intersections its edit added, not by the input's own",
+          "[compare][verdict]") {
+  // CGAL's cow intersects itself at rest (101 pairs): every method was called broken.
+  EditCase edit = scene_case("lift", 2000);
+  const Positions rest = edit.P;
+  int near = 0;
+  for (Eigen::Index v = 0; v < rest.rows(); ++v)
+    if ((rest.row(v).head<2>() - Eigen::RowVector2d(0.05, 0.5)).norm() <
+        (rest.row(near).head<2>() - Eigen::RowVector2d(0.05, 0.5)).norm())
+      near = static_cast<int>(v);
+  REQUIRE(edit.region.code(near) == Region::kFixed);
+  // A small upright quad, fixed too, through the fixed part of the plane.
+  const Vec3 p = rest.row(near);
+  const long n = rest.rows();
+  edit.P.conservativeResize(n + 4, 3);
+  edit.P.row(n) << p.x() - 0.01, p.y(), p.z() - 0.05;
+  edit.P.row(n + 1) << p.x() + 0.01, p.y(), p.z() - 0.05;
+  edit.P.row(n + 2) << p.x() + 0.01, p.y(), p.z() + 0.05;
+  edit.P.row(n + 3) << p.x() - 0.01, p.y(), p.z() + 0.05;
+  const long nf = edit.F.rows();
+  edit.F.conservativeResize(nf + 2, 3);
+  edit.F.row(nf) << n, n + 1, n + 2;
+  edit.F.row(nf + 1) << n, n + 2, n + 3;
+  std::vector<int> codes;
+  for (long v = 0; v < n; ++v) codes.push_back(edit.region.code(static_cast<int>(v)));
+  codes.insert(codes.end(), 4, Region::kFixed);
+  edit.region = Region::from_codes(codes);
+  ComparisonOptions options;
+  options.methods = {"shell"};
+  options.reference.clear();
+  const std::vector<MethodResult> results = compare_methods(edit, options);
+  REQUIRE(results.size() == 1);
+  REQUIRE(results[0].ok);
+  CHECK(results[0].rest_self_intersections > 0);
+  CHECK(results[0].self_intersections == 0);
+  CHECK(assess(results)[0].verdict != Verdict::Broken);
 }

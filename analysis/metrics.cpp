@@ -289,4 +289,62 @@ ReferenceDistance distance_to_reference(const Positions& P, const Faces& F, cons
   return out;
 }
 
+ShapeChange shape_change(const Positions& rest, const Positions& deformed, const Faces& F, const Region& region) {
+  const char* who = "shape_change";
+  if (deformed.rows() != rest.rows() || region.num_vertices() != rest.rows())
+    throw InvalidInput(std::string(who) + ": rest, deformed and region differ in their vertex counts");
+  check_mesh_arrays(rest, F, who);
+  ShapeChange c;
+  double rest_area = 0, area = 0;
+  long stretched = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    bool touches_free = false;
+    for (int k = 0; k < 3; ++k) touches_free |= region.code(F(f, k)) == Region::kFree;
+    if (!touches_free) continue;
+    const Vec3 a = rest.row(F(f, 0)), b = rest.row(F(f, 1)), d = rest.row(F(f, 2));
+    const Vec3 a1 = deformed.row(F(f, 0)), b1 = deformed.row(F(f, 1)), d1 = deformed.row(F(f, 2));
+    rest_area += 0.5 * (b - a).cross(d - a).norm();
+    area += 0.5 * (b1 - a1).cross(d1 - a1).norm();
+    // Each edge of a triangle with a free vertex; an interior edge is seen from both of its triangles,
+    // which weights the share alike for every edge and leaves the largest factor unchanged.
+    for (int k = 0; k < 3; ++k) {
+      const int i = F(f, k), j = F(f, (k + 1) % 3);
+      if (region.code(i) != Region::kFree && region.code(j) != Region::kFree) continue;
+      const double l = (rest.row(i) - rest.row(j)).norm(), l1 = (deformed.row(i) - deformed.row(j)).norm();
+      if (!(l > 0)) continue;
+      const double factor = l1 > 0 ? std::max(l1 / l, l / l1) : INFINITY;
+      ++c.edges;
+      stretched += factor > 1.5;
+      if (factor > c.largest_factor) c.largest_factor = factor, c.largest_vertex = region.code(i) == Region::kFree ? i : j;
+    }
+  }
+  if (c.edges > 0) c.stretched_share = static_cast<double>(stretched) / static_cast<double>(c.edges);
+  if (rest_area > 0) c.area_ratio = area / rest_area;
+  if (F.rows() > 0) c.volume_change = volume_change(rest, deformed, F);
+  return c;
+}
+
+std::string shape_change_warning(const ShapeChange& c) {
+  std::string why;
+  auto add = [&](const std::string& text) { why += (why.empty() ? "" : ", ") + text; };
+  char text[160];
+  if (c.largest_factor > 5) {
+    std::snprintf(text, sizeof text, "an edge at vertex %d stretched or shrank %.3g times", c.largest_vertex,
+                  c.largest_factor);
+    add(text);
+  }
+  if (c.area_ratio > 1.5 || c.area_ratio < 2.0 / 3) {
+    std::snprintf(text, sizeof text, "the free region's area changed x%.3g", c.area_ratio);
+    add(text);
+  }
+  if (c.volume_change && std::abs(*c.volume_change) > 0.3) {
+    std::snprintf(text, sizeof text, "the volume changed by %+.0f %%", 100 * *c.volume_change);
+    add(text);
+  }
+  if (why.empty()) return why;
+  return "the result does not keep the shape's proportions: " + why +
+         " (linear methods shrink or balloon under large rotations, space methods pinch or amplify between "
+         "handles close together; arap and gradient keep the proportions under rotations)";
+}
+
 }  // namespace msd

@@ -182,6 +182,31 @@ class VolumeChangeMetric {
 std::optional<double> volume_change(const Positions& rest, const Positions& deformed, const Faces& F);
 
 // ---------------------------------------------------------------------------------------------------
+// Shape change: the cheap check of one result
+
+//! How much a result changed lengths, area and volume around the free region. The linear methods fail
+//! under large rotations by shrinking, ballooning or shearing the free region (seed 9.2, 9.4); the space
+//! methods pinch and amplify between handles close together (seed 9.5): both show here.
+struct ShapeChange {
+  long edges = 0;                //!< edges with a free vertex (the ones measured)
+  double stretched_share = 0;    //!< of those, the share whose length changed more than 1.5× (grown or shrunk)
+  double largest_factor = 1;     //!< the largest change max(l'/l, l/l') of such an edge (inf: one collapsed)
+  int largest_vertex = -1;       //!< a vertex of that edge
+  double area_ratio = 1;         //!< area of the triangles with a free vertex, deformed over rest
+  std::optional<double> volume_change;  //!< closed meshes: V'/V − 1 (volume_change)
+};
+
+//! rest, deformed: #V by 3; F: #F by 3 (may be empty: nothing measured); region: #V codes. Edges of zero
+//! rest length are skipped. O(#F). \throw InvalidInput for differing row counts or an index out of range.
+ShapeChange shape_change(const Positions& rest, const Positions& deformed, const Faces& F, const Region& region);
+
+//! Empty, or why the result lost the shape: an edge stretched or shrunk by more than 5× (tears and
+//! collapses; on the built-in benchmark the shell, Laplacian editing, lattice and cages do this under bends
+//! and twists, ARAP, gradient editing and deformation transfer stay below 4.5×), the free region's area
+//! changed by more than 1.5× or below 2/3, or a closed mesh's volume changed by more than 30 %.
+std::string shape_change_warning(const ShapeChange& change);
+
+// ---------------------------------------------------------------------------------------------------
 // All metrics of one edit
 
 struct EditMetricsOptions {

@@ -99,11 +99,15 @@ void add_deform_command(CLI::App& app) {
     (*printer)(deformer->name() + ": preparing on " + std::to_string(rest.rows()) + " vertices");
     auto t0 = Clock::now();
     deformer->prepare(c.P, c.F, c.region);
-    (*printer)(deformer->name() + ": first frame (warms caches and buffers)");
     const double prepare_ms = ms_since(t0);
     Positions out(rest.rows(), 3);
-    deformer->deform(c.transforms, out);  // first frame warms caches and buffers
-    deformer->reset();  // the timed frame starts from rest too (an iterative one would start from the first)
+    // A linear method's first frame warms caches and buffers; an iterative method's one frame from rest is
+    // timed alone (a warm-up would double its run: PriMo's frame takes seconds to minutes).
+    if (deformer->traits().solve != DeformerSolve::Iterative) {
+      (*printer)(deformer->name() + ": first frame (warms caches and buffers)");
+      deformer->deform(c.transforms, out);
+      deformer->reset();  // the timed frame starts from rest too
+    }
     (*printer)(deformer->name() + ": the timed frame, from rest");
     t0 = Clock::now();
     deformer->deform(c.transforms, out);
@@ -163,8 +167,16 @@ void add_deform_command(CLI::App& app) {
     }
     if (report.folded_faces >= 0)
       std::printf("  folded triangles (normal turned against the deformed base's): %d\n", report.folded_faces);
+    const ShapeChange shape = shape_change(rest, out, c.F, c.region);
+    if (shape.edges > 0) {
+      std::printf("  shape: %.3g %% of the free region's edges changed length beyond 1.5x (the most %.3gx, at vertex %d), "
+                  "its area x%.3g", 100 * shape.stretched_share, shape.largest_factor, shape.largest_vertex, shape.area_ratio);
+      if (shape.volume_change) std::printf(", volume %+.3g %%", 100 * *shape.volume_change);
+      std::printf("\n");
+    }
     for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
       for (const std::string& w : *list) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    if (const std::string w = shape_change_warning(shape); !w.empty()) std::fprintf(stderr, "warning: %s\n", w.c_str());
     if (report.folded_faces > 0) std::fprintf(stderr, "advice: %s\n", fold_advice(*deformer).c_str());
     for (size_t k = 0; k < c.transforms.size(); ++k) {
       const double det = c.transforms[k].topLeftCorner<3, 3>().determinant();

@@ -284,3 +284,43 @@ TEST_CASE("prepared volume change: rest volume once, same value as the one-shot 
   CHECK_THROWS_WITH(metric.measure(bad), Contains("vertex 4"));
   CHECK_THROWS_AS(metric.measure(Positions(P.topRows(5))), InvalidInput);
 }
+
+TEST_CASE("shape change: lengths, area and volume around the free region, and when they mean a lost shape",
+          "[analysis][metrics]") {
+  struct {
+    Positions P;
+    Faces F;
+  } s;
+  test::icosphere(3, s.P, s.F);                 // closed
+  Region region(static_cast<int>(s.P.rows()));  // every vertex free
+  const ShapeChange same = shape_change(s.P, s.P, s.F, region);
+  CHECK(same.edges > 0);
+  CHECK(same.stretched_share == 0);
+  CHECK(same.largest_factor == Approx(1));
+  CHECK(same.area_ratio == Approx(1));
+  REQUIRE(same.volume_change);
+  CHECK(*same.volume_change == Approx(0).margin(1e-12));
+  CHECK(shape_change_warning(same).empty());
+  // A rigid motion keeps it all.
+  const ShapeChange moved = shape_change(s.P, test::rigid_motion(s.P, some_rotation(), Vec3(1, 2, 3)), s.F, region);
+  CHECK(moved.largest_factor == Approx(1));
+  CHECK(shape_change_warning(moved).empty());
+  // Twice the size: every edge 2x (not a tear), the area x4 and the volume x8 are.
+  const ShapeChange doubled = shape_change(s.P, 2.0 * s.P, s.F, region);
+  CHECK(doubled.stretched_share == 1);
+  CHECK(doubled.largest_factor == Approx(2));
+  CHECK(doubled.area_ratio == Approx(4));
+  CHECK(*doubled.volume_change == Approx(7));
+  CHECK_THAT(shape_change_warning(doubled), Contains("area changed x4") && Contains("volume changed by +700 %"));
+  // One vertex pulled far out: a torn edge, named by its vertex.
+  Positions torn = s.P;
+  torn.row(100) *= 20;
+  const ShapeChange t = shape_change(s.P, torn, s.F, region);
+  CHECK(t.largest_factor > 5);
+  CHECK(t.largest_vertex == 100);
+  CHECK_THAT(shape_change_warning(t), Contains("an edge at vertex 100 stretched or shrank"));
+  // Only edges with a free vertex count: all fixed, nothing measured.
+  const ShapeChange none = shape_change(s.P, torn, s.F, Region(static_cast<int>(s.P.rows()), Region::kFixed));
+  CHECK(none.edges == 0);
+  CHECK_THROWS_AS(shape_change(s.P, torn.topRows(10), s.F, region), InvalidInput);
+}

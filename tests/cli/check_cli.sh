@@ -68,6 +68,13 @@ grep -qF "frame: no iteration was needed" out.txt || { cat out.txt; fail "the fr
 # STL output keeps no vertex list: said before the work.
 "$msdeform" deform --scene lift --resolution 2k --method shell -o lifted.stl >/dev/null 2>err.txt || fail "deform to STL"
 grep -q "STL keeps no vertex list" err.txt || fail "no warning that STL output renumbers the vertices"
+# The report measures the shape: the shell under a 120° bend tears edges (warned), ARAP does not.
+"$msdeform" deform --scene bend120 --resolution 2k --method shell -o s.off >out.txt 2>err.txt || fail "shell bend"
+grep -q "shape: .* of the free region's edges changed length beyond 1.5x" out.txt || { cat out.txt; fail "no shape line"; }
+grep -q "warning: the result does not keep the shape's proportions: an edge at vertex" err.txt ||
+  { cat err.txt; fail "the shell's torn bend was not warned about"; }
+"$msdeform" deform --scene bend120 --resolution 2k --method arap -o a.off >out.txt 2>err.txt || fail "arap bend"
+grep -q "proportions" err.txt && { cat err.txt; fail "ARAP's bend was warned about"; }
 # compare -o naming a file fails before any scene is built.
 touch not-a-folder
 expect_error 1 "is a file; compare writes a folder" "$msdeform" compare --scenes lift -o not-a-folder

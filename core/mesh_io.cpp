@@ -160,11 +160,12 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
   const long nv = parse_number<long>(glued.empty() ? next_token(line) : glued, reader, "the vertex count");
   const long nf = parse_number<long>(next_token(line), reader, "the face count");
   if (nv < 0 || nf < 0) reader.fail("negative vertex or face count");
-  // A vertex takes at least 6 bytes ("0 0 0\n"), a face at least 8 ("3 0 1 2\n"); the last line may lack its
+  // A vertex takes at least 6 bytes ("0 0 0\n"), a face record at least 2 (its corner count: a face with too
+  // few corners is then named by the face reader, not taken for a short file); the last line may lack its
   // newline. Counts the rest of the file cannot hold are refused before anything is allocated.
   const size_t left = reader.bytes_left() + 1;
-  if (static_cast<unsigned long>(nv) > left / 6 || static_cast<unsigned long>(nf) > left / 8 ||
-      6 * static_cast<unsigned long>(nv) + 8 * static_cast<unsigned long>(nf) > left)
+  if (static_cast<unsigned long>(nv) > left / 6 || static_cast<unsigned long>(nf) > left / 2 ||
+      6 * static_cast<unsigned long>(nv) + 2 * static_cast<unsigned long>(nf) > left)
     reader.fail("the header declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
                 " faces, but only " + std::to_string(left - 1) + " bytes follow");
   FileContents soup;

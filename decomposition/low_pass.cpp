@@ -29,6 +29,13 @@ constexpr double kMinAreaRatio = 0.5;
 // A given detail scale above this many diameters of S is refused (see low_pass_base).
 constexpr double kMaxScaleOverDiameter = 1e6;
 
+// Twice the largest distance from the centroid: a size that, unlike the bounding box, does not change
+// when S is rotated.
+double diameter(const Positions& S) {
+  const Eigen::RowVector3d c = S.colwise().mean();
+  return 2 * std::sqrt((S.rowwise() - c).rowwise().squaredNorm().maxCoeff());
+}
+
 // (M + ℓ⁴ W M̃⁻¹ W) B = M S on the vertices off the mesh boundary, B = S on it; prepared once per mesh,
 // solve() refactors for each ℓ (same pattern). Coordinates are relative to the centroid of S.
 class LowPassSystem {
@@ -74,6 +81,14 @@ class LowPassSystem {
         solver_.factor(std::move(Auu));  // released before the numeric factorisation
     } catch (const SolverError& e) {
       const long v = e.index() >= 0 ? unknown_[e.index()] : -1;
+      // Far beyond the mesh's size ℓ⁴ swamps the data term and the system is singular in floating point.
+      const double size = diameter(centred_);
+      if (detail_scale > size)
+        throw SolverError(std::string(kWho) + ": the detail scale " + format_number(detail_scale) + " is " +
+                              format_number(detail_scale / size) + " times the mesh's diameter " + format_number(size) +
+                              ", too large for the smoothing system (singular in floating point); a detail scale "
+                              "is a feature length on the mesh, below its diameter",
+                          v);
       throw SolverError(std::string(kWho) + ": the smoothing system is singular" +
                             (v >= 0 ? " near vertex " + std::to_string(v) : std::string()) +
                             " (degenerate faces around it?): " + e.what(),
@@ -102,13 +117,6 @@ class LowPassSystem {
   Eigen::MatrixXd known_values_;
   SparseSPDSolver solver_;
 };
-
-// Twice the largest distance from the centroid: a size that, unlike the bounding box, does not change
-// when S is rotated.
-double diameter(const Positions& S) {
-  const Eigen::RowVector3d c = S.colwise().mean();
-  return 2 * std::sqrt((S.rowwise() - c).rowwise().squaredNorm().maxCoeff());
-}
 
 }  // namespace
 

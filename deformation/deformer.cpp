@@ -89,7 +89,7 @@ void Deformer::end_frame(const Positions& out) {
   if (!frame_report_.converged)
     frame_report_.warnings.push_back(name() + ": stopped after " + std::to_string(frame_report_.iterations) +
                                      " iterations with relative residual " + std::to_string(frame_report_.residual) +
-                                     "; raise the iteration limit or the tolerance");
+                                     "; raise the iteration limit, or loosen the tolerance where the method has one (ARAP, PriMo)");
 }
 
 void Deformer::deform(const std::vector<Mat4>& transforms, Positions& out) {

@@ -315,6 +315,9 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
   CHECK_THROWS_WITH(load_mesh(write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")),
                     Contains("line 4") && Contains("out of range"));
   CHECK_THROWS_WITH(load_mesh(write("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n")), Contains("declares 3 vertices and 1 faces, but only 12 bytes follow"));
+  // A face with two corners is named, not taken for a short file (the byte count assumed 3 corners).
+  CHECK_THROWS_WITH(load_mesh(write("two.off", "OFF\n4 3 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n2 1 3\n3 1 3 2\n")),
+                    Contains("face 1 has 2 corners"));
   CHECK_THROWS_WITH(load_mesh(write("short2.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n\n\n\n\n\n\n\n\n\n\n\n\n\n")),
                     Contains("file ends after 2 of 3 vertices"));
   CHECK_THROWS_WITH(load_mesh(write("word.off", "OFF\n3 1 0\n0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n")),

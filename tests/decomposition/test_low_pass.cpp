@@ -1,6 +1,8 @@
 #include <catch2/catch.hpp>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/mesh.h"
+#include "msdeform/core/mesh_io.h"
 #include "msdeform/core/scenes.h"
 #include "msdeform/decomposition/detail_check.h"
 #include "msdeform/decomposition/low_pass.h"
@@ -177,4 +179,18 @@ TEST_CASE("low-pass cache: the same mesh and options give the stored base, any c
   given.detail_scale = 0.2;
   cache.base(moved, flipped, given, &report);
   CHECK(report.reused);
+}
+
+TEST_CASE("low-pass base: a scale that makes the system singular is named as too large, not blamed on a vertex",
+          "[decomposition][low-pass]") {
+  // CGAL's homer at L = 1000 (about 500 diameters): "singular near vertex 4929 (degenerate faces around it?)".
+  const Mesh homer = load_mesh(test::cgal_mesh("homer.off"));
+  LowPassOptions options;
+  options.detail_scale = 1000;
+  try {
+    low_pass_base(positions(homer), faces(homer), options);
+    SUCCEED("factored at this scale on this machine's BLAS");
+  } catch (const SolverError& e) {
+    CHECK_THAT(e.what(), Contains("times the mesh's diameter") && !Contains("degenerate faces"));
+  }
 }

@@ -1,6 +1,8 @@
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <vector>
 
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/deformers.h"
@@ -53,7 +55,13 @@ void add_decompose_command(CLI::App& app) {
     NormalDisplacements details;
     details.encode(S, F, d.base, d.base_faces);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    const Eigen::VectorXd h = details.heights();
+    // A vertex no face uses has no detail (the base keeps it): its closest point on B lies on some other part.
+    Eigen::VectorXd h = details.heights();
+    std::vector<char> used(static_cast<size_t>(S.rows()), 0);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) used[F(f, k)] = 1;
+    const long unused = std::count(used.begin(), used.end(), 0);
+    for (Eigen::Index v = 0; v < h.size(); ++v) h[v] = used[v] ? h[v] + 0.0 : 0.0;  // + 0.0: no "-0" in the file
     SaveOptions save;
     if (same_connectivity) {
       save.vertex_scalar = &h;
@@ -88,8 +96,10 @@ void add_decompose_command(CLI::App& app) {
                       "per-vertex heights)\n", report.remesh_edge_length, report.remeshed_vertices);
     }
     print_check("  ", report.check);
-    std::printf("  normal-displacement heights in [%.4g, %.4g], mean |h| %.4g, %d vertices without a base point\n",
+    std::printf("  normal-displacement heights in [%.4g, %.4g], mean |h| %.4g, %d vertices without a base point",
                 h.minCoeff(), h.maxCoeff(), h.cwiseAbs().mean(), details.report().fallback);
+    if (unused > 0) std::printf(" (%ld vertices no face uses: height 0)", unused);
+    std::printf("\n");
     if (!report.warning.empty()) std::fprintf(stderr, "warning: %s\n", report.warning.c_str());
     std::printf("  wrote %s\n", output->c_str());
   });

@@ -75,6 +75,12 @@ grep -q "warning: the result does not keep the shape's proportions: an edge at v
   { cat err.txt; fail "the shell's torn bend was not warned about"; }
 "$msdeform" deform --scene bend120 --resolution 2k --method arap -o a.off >out.txt 2>err.txt || fail "arap bend"
 grep -q "proportions" err.txt && { cat err.txt; fail "ARAP's bend was warned about"; }
+# decompose: a vertex no face uses has no detail (its height was the distance to some other part of B).
+printf 'OFF\n9 12 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n5 5 5\n3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n3 1 2 6\n3 1 6 5\n3 2 3 7\n3 2 7 6\n3 3 0 4\n3 3 4 7\n' >cube-stray.off
+"$msdeform" decompose cube-stray.off -o cube-stray.ply >out.txt 2>err.txt || { cat err.txt; fail "decompose with an unused vertex"; }
+grep -q "1 vertices no face uses: height 0" out.txt || { cat out.txt; fail "decompose did not set the unused vertex's height to 0"; }
+[ "$(awk '/end_header/ { on = 1; next } on && NR > 0 { n++; if (n == 9) print $4 }' cube-stray.ply)" = 0 ] ||
+  fail "the unused vertex's detail in the PLY is not 0"
 # compare -o naming a file fails before any scene is built.
 touch not-a-folder
 expect_error 1 "is a file; compare writes a folder" "$msdeform" compare --scenes lift -o not-a-folder

@@ -55,6 +55,8 @@ def rotation(axis, degrees, about=None):
     if length == 0:
         raise ValueError("axis must not be zero")
     k = k / length
+    if not math.isfinite(float(degrees)):
+        raise ValueError(f"degrees must be finite, got {degrees}")
     theta = math.radians(float(degrees))
     K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
     R = np.eye(3) + math.sin(theta) * K + (1.0 - math.cos(theta)) * (K @ K)
@@ -70,7 +72,7 @@ def scaling(factor, about=None):
     """The 4x4 float64 scaling by `factor` (a number, or 3 numbers per axis) about the point `about`
     (default the origin)."""
     f = np.asarray(factor, dtype=np.float64)
-    f = np.full(3, float(f)) if f.ndim == 0 else _vec3(f, "factor")
+    f = _vec3(np.full(3, float(f)) if f.ndim == 0 else f, "factor")
     T = np.eye(4)
     T[:3, :3] = np.diag(f)
     if about is not None:

@@ -140,3 +140,13 @@ def test_scenes(lift):
         msdeform.scene("nope")
     with pytest.raises(TypeError, match="resolution"):
         msdeform.scene("lift", 1000.5)
+
+
+def test_transform_helpers_refuse_non_finite_values():
+    # rotation('x', nan) returned a NaN matrix; deform refused it only later.
+    with pytest.raises(ValueError, match="degrees must be finite"):
+        msdeform.rotation("x", float("nan"))
+    with pytest.raises(ValueError, match="factor must be finite"):
+        msdeform.scaling(float("inf"))
+    with pytest.raises(ValueError, match="t must be finite"):
+        msdeform.translation((0, float("nan"), 0))

@@ -344,7 +344,7 @@ std::string shape_change_warning(const ShapeChange& c) {
   if (why.empty()) return why;
   return "the result does not keep the shape's proportions: " + why +
          " (linear methods shrink or balloon under large rotations, space methods pinch or amplify between "
-         "handles close together; arap and gradient keep the proportions under rotations)";
+         "handles close together; arap keeps them best)";
 }
 
 }  // namespace msd

@@ -82,11 +82,13 @@ EditCase weld_case(EditCase c, double eps) {
   return c;
 }
 
-void require_surface(const EditCase& edit, const std::string& method) {
+void require_surface(const EditCase& edit, const std::string& method, bool is_method) {
   if (edit.surface_problem.empty()) return;
-  throw InvalidInput(method + " is a surface method and " + (edit.path.empty() ? edit.name : edit.path) +
-                     " is not a manifold triangle mesh: " + edit.surface_problem +
-                     ". Space methods deform any input: --method lattice, cage-mvc, cage-harmonic or rbf");
+  throw InvalidInput(method + (is_method ? " is a surface method and " : " needs a surface, and ") +
+                     (edit.path.empty() ? edit.name : edit.path) + " is not a manifold triangle mesh: " +
+                     edit.surface_problem +
+                     (is_method ? ". Space methods deform any input: --method lattice, cage-mvc, cage-harmonic or rbf"
+                                : ""));
 }
 
 }  // namespace msd

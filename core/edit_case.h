@@ -64,7 +64,8 @@ EditCase weld_case(EditCase edit, double eps);
 
 //! Refuses an edit that a surface method (or operation) cannot take: method is its name for the message.
 //! \throw InvalidInput "<method> is a surface method and <file> is not a manifold triangle mesh:
-//! <problem>. Space methods deform any input: ..." when edit.surface_problem is not empty.
-void require_surface(const EditCase& edit, const std::string& method);
+//! <problem>. Space methods deform any input: ..." when edit.surface_problem is not empty (the last
+//! sentence only for a deformation method: is_method).
+void require_surface(const EditCase& edit, const std::string& method, bool is_method = true);
 
 }  // namespace msd

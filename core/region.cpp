@@ -98,6 +98,10 @@ void Region::validate(int num_vertices, const Faces* F) const {
         }
       }
     }
+    if (!anchored && size == 1 && adjacency.begin(seed) == adjacency.end(seed))
+      throw TopologyError("region: free vertex " + std::to_string(seed) +
+                          " is used by no face, so nothing determines where it goes; fix it or select it as part "
+                          "of a handle, or remove it from the file");
     if (!anchored)
       throw TopologyError("region: free component " + std::to_string(id) + " (" + std::to_string(size) +
                           " vertices, e.g. vertex " + std::to_string(seed) +

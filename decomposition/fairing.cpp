@@ -83,7 +83,9 @@ void RegionFairing::prepare(const Positions& P, const Faces& F, const Region& re
     if (e.index() < 0) throw SolverError(std::string(who) + ": " + e.what());
     throw SolverError(std::string(who) + ": the " + to_string(options.order) +
                           " system is singular at free vertex " + std::to_string(e.index()) +
-                          " (degenerate faces around it, or it is not coupled to any fixed or handle vertex)",
+                          " (degenerate faces around it, it is not coupled to any fixed or handle vertex, or the "
+                          "system is singular in floating point: a higher order over a free region many rings wide "
+                          "is; a lower order or the low-pass base avoids it)",
                       e.index());
   }
   known_.resize(static_cast<Eigen::Index>(known.size()), 3);

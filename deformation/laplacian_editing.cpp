@@ -119,7 +119,9 @@ void LaplacianEditing::prepare_implicit(const Positions& P, const Faces& F, cons
   } catch (const SolverError& e) {
     const long v = e.index() >= 0 ? e.index() / 3 : -1;
     throw SolverError("laplacian: the least-squares system is singular near vertex " + std::to_string(v) +
-                          " (a free vertex whose faces all have zero area, or a one-ring too degenerate to fit)",
+                          " (a free vertex whose faces all have zero area, a one-ring too degenerate to fit, or "
+                          "fixed and handle vertices too few or too flat to pin the free region's linearised "
+                          "rotations: fix a larger region, or use the explicit variant or gradient editing)",
                       v);
   }
   frame_.prepare(system_, 1);

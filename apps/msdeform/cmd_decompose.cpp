@@ -43,7 +43,7 @@ void add_decompose_command(CLI::App& app) {
     edit->check_output(*output, "-o");
     const bool fairing = decomposition->options.kind == DecompositionKind::Fairing;
     EditCase c = edit->load(/*need_transforms=*/false, /*need_region=*/fairing);
-    require_surface(c, "decompose");
+    require_surface(c, "decompose", /*is_method=*/false);
     if (c.region.num_vertices() == 0) c.region = Region(static_cast<int>(c.P.rows()));  // all free
     const Positions& S = c.P;
     const Faces& F = c.F;

@@ -56,7 +56,7 @@ void add_render_command(CLI::App& app) {
       std::printf("region: %zu fixed, %zu free, %d handle(s)\n", c.region.fixed_vertices().size(),
                   c.region.free_vertices().size(), c.region.num_handles());
     } else if (mode == "detail") {
-      require_surface(c, "render --color detail");
+      require_surface(c, "render --color detail", /*is_method=*/false);
       LowPassOptions lp;
       lp.detail_scale = *detail_scale;
       LowPassReport report;
@@ -77,7 +77,7 @@ void add_render_command(CLI::App& app) {
       o.scalar_label = "rigidity";
       std::printf("rigidity against %s: mean %.4g, max %.4g\n", rest->c_str(), heights.mean(), heights.maxCoeff());
     } else if (mode == "selfint") {
-      require_surface(c, "render --color selfint");
+      require_surface(c, "render --color selfint", /*is_method=*/false);
       std::vector<std::pair<int, int>> pairs;
       const int n = count_self_intersections(c.P, c.F, &pairs);
       colors = Positions::Constant(c.P.rows(), 3, 0.85).rowwise() - Eigen::RowVector3d(0, 0.1, 0.2);

@@ -247,9 +247,9 @@ def test_prepare_errors(lift):
         d.prepare(nan, F, labels)
     with pytest.raises(ValueError, match="surface method needs triangles"):
         d.prepare(V, None, labels)
-    # A free vertex that touches nothing constrained: its shape is undetermined.
+    # A free vertex that no face uses: nothing determines where it goes (named as such, not as a component).
     lonely = np.vstack([V, [[5.0, 5.0, 5.0]]])
-    with pytest.raises(msdeform.TopologyError, match="touches no fixed or handle vertex"):
+    with pytest.raises(msdeform.TopologyError, match=r"free vertex %d is used by no face" % len(V)):
         msdeform.Deformer("shell").prepare(lonely, F, np.append(labels, 1))
 
 

@@ -98,6 +98,9 @@ printf '0\n1\n1\n2\n' >cloud.sel
 printf '1 0 0 0\n0 1 0 0\n0 0 1 0.1\n0 0 0 1\n' >cloud.def
 expect_error 1 "runs failed" "$msdeform" compare --mesh cloud.off --sel cloud.sel --def cloud.def --methods shell,rbf -o cmp
 [ -s cmp/index.html ] || fail "compare wrote no index.html"
+# render needs a surface for self-intersections, and does not take a --method.
+expect_error 1 "render --color selfint needs a surface" "$msdeform" render cloud.off --color selfint -o c.png
+grep -q -- "--method" err.txt && { cat err.txt; fail "render advised a --method"; }
 # compare: a stray vertex is the input's fault: warned about once, not by every method.
 python3 - <<'PY' || fail "could not write the plane with a stray vertex"
 lines = open("lift.off").read().split("\n")

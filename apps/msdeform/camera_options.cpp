@@ -18,7 +18,9 @@ void CameraOptions::add_to(CLI::App& cmd) {
                             "above, anything else stands along its longest axis), x, y, z, -x, -y or -z")
       ->capture_default_str();
   g->add_option("--view", view, "Camera direction: auto, or AZ,EL in degrees (azimuth about up from the front, "
-                                "elevation above the horizon; auto is 31,34.4)")
+                                "elevation above the horizon; auto is 31,34.4). With an explicit --up the front is "
+                                "fixed (the camera at azimuth 0 sits on -y for z up, else on +z), so separate runs "
+                                "draw a shape and its deformations from the same place")
       ->capture_default_str();
   g->add_option("--focus", focus, "Frame all of the shape, or its handles")
       ->check(CLI::IsMember({"all", "handle"}))
@@ -45,6 +47,12 @@ void CameraOptions::apply(const Positions& P, const Region& region, RenderOption
                                 el = comma == std::string::npos ? std::nullopt : cli::decimal_number(view.substr(comma + 1));
     if (!az || !el || std::abs(*el) >= 90)
       throw InvalidInput("--view " + view + ": expected auto or AZ,EL in degrees with |EL| < 90");
+    if (up != "auto") {
+      // Up and view both given: the front is a fixed world axis, not one found from the shape's extents, so
+      // separate runs (a rest shape, its deformations) take their pictures from the same place.
+      axes.front = axes.up.z() != 0 ? Vec3(Vec3::UnitY()) : Vec3(-Vec3::UnitZ());
+      axes.side = axes.front.cross(axes.up);
+    }
     o.view_direction = axes.direction(*az, *el);
   }
   if (focus == "handle") {

@@ -493,14 +493,16 @@ void add_compare_command(CLI::App& app) {
       tiles_by_scene.push_back(std::move(column));
       all.insert(all.end(), std::make_move_iterator(results.begin()), std::make_move_iterator(results.end()));
     }
-    // Contact sheet like Fig. 9.16: one column per scene, one row per method (the input on top).
+    // Contact sheet like Fig. 9.16: one column per scene, one row per method (the input first).
     const size_t rows = options.methods.size() + 1;
     for (size_t r = 0; r < rows; ++r)
       for (size_t s = 0; s < scene_outputs.size(); ++s) {
         tiles.push_back(std::move(tiles_by_scene[s][r]));
         tile_labels.push_back(scene_outputs[s].name + " / " + (r == 0 ? std::string("input") : options.methods[r - 1]));
       }
-    write_png(tile_images(tiles, static_cast<int>(scene_outputs.size()), tile_labels), (out / "contact_sheet.png").string());
+    // One edit (--mesh) would make a single tall column: its pictures then fill rows of four.
+    const int columns = scene_outputs.size() == 1 ? 4 : static_cast<int>(scene_outputs.size());
+    write_png(tile_images(tiles, columns, tile_labels), (out / "contact_sheet.png").string());
     write_file_atomically((out / "metrics.csv").string(), metrics_csv(all));
     write_file_atomically((out / "metrics.md").string(), metrics_markdown(all));
     const std::vector<Assessment> assessments = assess(all);

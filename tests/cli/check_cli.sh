@@ -111,6 +111,9 @@ open("stray.off", "w").write("\n".join(lines))
 PY
 "$msdeform" compare --mesh stray.off --sel lift.sel --def lift.def --methods shell,gradient -o cmp-stray >/dev/null 2>err.txt
 [ "$(grep -c "a few outlying vertices" err.txt)" = 1 ] || { cat err.txt; fail "compare did not warn of the stray vertex once"; }
+# One edit's contact sheet fills rows (it was one column, 656 x 5188 pixels for 10 pictures).
+/usr/bin/python3 -c "import struct, sys; w, h = struct.unpack('>II', open(sys.argv[1], 'rb').read()[16:24]); sys.exit(0 if w > h else 1)" \
+  cmp-stray/contact_sheet.png || fail "one edit's contact sheet is taller than wide"
 
 # Seams: the plane with its right half on its own copies of the cut's vertices.
 python3 - <<'PY' || fail "could not write the split plane"

@@ -7,6 +7,7 @@
 #include "apps/msdeform/commands.h"
 #include "apps/msdeform/deformers.h"
 #include "apps/msdeform/edit_case.h"
+#include "apps/msdeform/progress.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/detail/normal_displacements.h"
@@ -37,6 +38,8 @@ void add_decompose_command(CLI::App& app) {
                   "height of the detailed vertex (written atomically); a remeshed base has its own triangles and no "
                   "'detail' property")
       ->required();
+  auto quiet = std::make_shared<bool>(false);
+  cmd->add_flag("-q,--quiet", *quiet, "No progress lines on stderr (the automatic detail scale's candidates)");
   cmd->callback([=] {
     if (file_extension(*output) != ".ply")
       throw InvalidInput("decompose: " + *output + ": the output carries per-vertex detail heights and must be .ply");
@@ -49,7 +52,8 @@ void add_decompose_command(CLI::App& app) {
     const Faces& F = c.F;
     const auto t0 = std::chrono::steady_clock::now();
     const DecompositionOptions options = decomposition->resolve(c);
-    const Decomposition d = decompose(S, F, c.region, options);
+    ProgressPrinter printer(*quiet);
+    const Decomposition d = decompose(S, F, c.region, options, [&](const std::string& line) { printer(line); });
     const DecompositionReport& report = d.report;
     const bool same_connectivity = d.base_faces.rows() == F.rows() && d.base_faces == F;
     NormalDisplacements details;

@@ -81,6 +81,11 @@ printf 'OFF\n9 12 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n5 5
 grep -q "1 vertices no face uses: height 0" out.txt || { cat out.txt; fail "decompose did not set the unused vertex's height to 0"; }
 [ "$(awk '/end_header/ { on = 1; next } on && NR > 0 { n++; if (n == 9) print $4 }' cube-stray.ply)" = 0 ] ||
   fail "the unused vertex's detail in the PLY is not 0"
+# decompose reports the automatic scale's candidates as progress, and -q silences them as in deform.
+"$msdeform" decompose lift.off -o lift-base.ply >out.txt 2>err.txt || { cat err.txt; fail "decompose lift"; }
+grep -q "detail scale candidate 1 of at most" err.txt || { cat err.txt; fail "decompose printed no candidates"; }
+"$msdeform" decompose lift.off -q -o lift-base.ply >out.txt 2>err.txt || { cat err.txt; fail "decompose -q"; }
+[ -s err.txt ] && { cat err.txt; fail "decompose -q printed progress"; }
 # compare -o naming a file fails before any scene is built.
 touch not-a-folder
 expect_error 1 "is a file; compare writes a folder" "$msdeform" compare --scenes lift -o not-a-folder

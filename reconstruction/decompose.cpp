@@ -45,7 +45,7 @@ std::string remedy(const DecompositionReport& r) {
 std::string check_decomposition(const DecompositionReport& r, const DecompositionOptions& o, long num_vertices) {
   if (r.area_ratio < kMinBaseAreaRatio) {
     char text[200];
-    std::snprintf(text, sizeof text, "multiscale: the base lost the shape (its area around the free region is %.3g "
+    std::snprintf(text, sizeof text, "decompose: the base lost the shape (its area over the triangles with a free vertex is %.3g "
                   "of the input's; the details would be the shape itself): ", r.area_ratio);
     throw TopologyError(text + remedy(r));
   }
@@ -56,12 +56,12 @@ std::string check_decomposition(const DecompositionReport& r, const Decompositio
   std::snprintf(where, sizeof where, "near vertex %d the detail height %.3g is %.3g times the base's curvature radius %.3g",
                 c.worst_vertex, c.worst_height, c.max_fold_ratio, c.worst_radius);
   if (c.folding_vertices > static_cast<long>(1e-3 * static_cast<double>(num_vertices)))
-    throw TopologyError("multiscale: the details fold over at rest (" + std::to_string(c.folding_vertices) +
+    throw TopologyError("decompose: the details fold over at rest (" + std::to_string(c.folding_vertices) +
                         " vertices with a height above the base's curvature radius; " + where + "): " + remedy(r));
   if (folds)
-    return "multiscale: the details of " + std::to_string(c.folding_vertices) + " vertices fold over at rest (" +
+    return "decompose: the details of " + std::to_string(c.folding_vertices) + " vertices fold over at rest (" +
            where + "): " + remedy(r);
-  return std::string("multiscale: the details come close to folding over the base (") + where +
+  return std::string("decompose: the details come close to folding over the base (") + where +
          "); an edit that bends the base further may fold them: " + remedy(r);
 }
 
@@ -90,7 +90,7 @@ void remesh_base(const Positions& S, const Region& region, double edge, Decompos
   const double allowed = std::max(2 * report.check.max_height, 0.01 * bounding_box_diagonal(S));
   if (!(far <= allowed)) {
     char text[300];
-    std::snprintf(text, sizeof text, "multiscale: the base remeshed to edge length %g (%d vertices) lies up to %.3g "
+    std::snprintf(text, sizeof text, "decompose: the base remeshed to edge length %g (%d vertices) lies up to %.3g "
                   "from the input, more than %.3g (twice the detail height, or 1 %% of the diagonal): the edges are "
                   "too long for the shape; use a smaller --remesh-base", edge, report.remeshed_vertices, far, allowed);
     throw InvalidInput(text);
@@ -181,7 +181,7 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
   report.area_ratio = free_area_ratio(S, d.base, F, region);
   report.warning = check_decomposition(report, o, S.rows());
   if (report.low_pass.all_boundary)
-    report.warning = "multiscale: every vertex lies on the mesh boundary, which the low-pass base keeps in place, so "
+    report.warning = "decompose: every vertex lies on the mesh boundary, which the low-pass base keeps in place, so "
                      "the base is the mesh itself and there are no details (an edit is the base method's alone)";
   if (o.kind == DecompositionKind::Remeshed)
     remesh_base(S, region, o.remesh_edge_length > 0 ? o.remesh_edge_length : mean_edge_length(S, F), d);

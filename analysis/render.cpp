@@ -685,11 +685,16 @@ ViewAxes edit_view_axes(const Positions& P, const std::vector<int>& fixed_vertic
   bool flat = false;
   const Vec3 principal = principal_up(P, flat);
   if (!flat && !fixed_vertices.empty()) {
-    Vec3 fixed = Vec3::Zero();
-    for (int v : fixed_vertices) fixed += P.row(v).transpose();
+    Vec3 fixed = Vec3::Zero(), lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+    for (int v : fixed_vertices) {
+      fixed += P.row(v).transpose();
+      lo = lo.cwiseMin(P.row(v).transpose()), hi = hi.cwiseMax(P.row(v).transpose());
+    }
     fixed /= static_cast<double>(fixed_vertices.size());
     const Vec3 away = Vec3(P.colwise().mean().transpose()) - fixed;
-    if (away.norm() > 0.1 * bounding_box_diagonal(P)) return view_axes(P, nearest_axis(away));
+    const double diagonal = bounding_box_diagonal(P);
+    // A foot or a base spans a few percent of the shape at least; a pin of a few vertices says nothing of up.
+    if (away.norm() > 0.1 * diagonal && (hi - lo).norm() >= 0.05 * diagonal) return view_axes(P, nearest_axis(away));
   }
   return view_axes(P, nearest_axis(principal));
 }

@@ -98,7 +98,8 @@ ViewAxes view_axes(const Positions& P);
 ViewAxes view_axes(const Positions& P, const Vec3& up);
 //! For an edit: a shape that is not flat and whose fixed vertices (indices into P) sit to one side, as
 //! feet, a base or a head do (their centroid more than a tenth of the bounding-box diagonal from the
-//! vertices' centroid), stands along that side's axis: up is the coordinate axis nearest the direction
+//! vertices' centroid, and their own box at least 5 % of it: a pin of a few vertices does not count),
+//! stands along that side's axis: up is the coordinate axis nearest the direction
 //! from them to the shape, positive (by the authoring convention, so a figure fixed at its head is not
 //! turned upside down). Otherwise view_axes(P).
 ViewAxes edit_view_axes(const Positions& P, const std::vector<int>& fixed_vertices);

@@ -489,6 +489,11 @@ TEST_CASE("view axes: a flat shape is seen from above, others stand along their 
   for (int v = 0; v < bar.P.rows(); ++v)
     if (bar.P(v, 0) > 0.9) top.push_back(v);
   CHECK(edit_view_axes(bar.P, top).up == Vec3::UnitX());
+  // One pinned vertex on the underside says nothing about up, unlike the whole underside above (CGAL's bear,
+  // --fixed vertex:0,2, lay on its side).
+  const auto pin = std::min_element(below.begin(), below.end(), [&](int a, int b) { return bar.P(a, 2) < bar.P(b, 2); });
+  CHECK(view_axes(bar.P).up != Vec3::UnitZ());
+  CHECK(edit_view_axes(bar.P, {*pin}).up == view_axes(bar.P).up);
   // A fixed part around the middle gives no direction: the principal axes decide.
   std::vector<int> all(bar.P.rows());
   for (int v = 0; v < bar.P.rows(); ++v) all[v] = v;

@@ -29,6 +29,7 @@ struct FileContents {
   std::vector<double> vertex_property;  // PLY: the values of the property asked for (PlyReader)
   std::vector<int> corners, offsets{0}, lines;
   int first_ignored_line = 0;  // OFF and ASCII PLY: the first line of data after the header's counts
+  int first_attribute_line = 0;  // OFF: the first record with numbers past its coordinates or indices
 };
 
 // Longest line a text reader looks through for its end: a text file's line is far shorter, so a bad file
@@ -200,12 +201,16 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
     for (long k = 0; k < n; ++k)
       soup.corners.push_back(parse_number<int>(record_token(reader, line, wrapped), reader, "a vertex index"));
     check_wrapped_record_end(reader, line, wrapped, "face", f, first_line);
+    if (soup.first_attribute_line == 0 && !wrapped && !next_token(line).empty())
+      soup.first_attribute_line = reader.number();  // a face colour
     soup.offsets.push_back(static_cast<int>(soup.corners.size()));
     soup.lines.push_back(reader.number());
   }
   // More records than the header counts (CGAL's prim.off has a face too many): read as counted, as
   // other readers do, and reported.
   if (reader.next(line)) soup.first_ignored_line = reader.number();
+  if (extra_line > 0 && (soup.first_attribute_line == 0 || extra_line < soup.first_attribute_line))
+    soup.first_attribute_line = extra_line;  // vertex colours or normals
   return soup;
 }
 
@@ -658,6 +663,7 @@ TriangleSoup triangulate(const FileContents& soup, const std::string& path, cons
   const int npoly = static_cast<int>(soup.offsets.size()) - 1;
   if (nv == 0) throw InvalidInput(who + ": " + path + " has no vertices");
   report.first_ignored_line = soup.first_ignored_line;
+  report.first_attribute_line = soup.first_attribute_line;
   TriangleSoup out;
   out.P.resize(nv, 3);
   for (int i = 0; i < nv; ++i) out.P.row(i) = soup.points[i];

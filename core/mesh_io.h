@@ -17,6 +17,9 @@ struct LoadReport {
   //! OFF and ASCII PLY: the first line of data after the header's counts (ignored: the file holds more
   //! than its header declares), or 0.
   int first_ignored_line = 0;
+  //! OFF: the first vertex or face line with numbers after its coordinates or indices (a COFF's colours,
+  //! an NOFF's normals): read past and not kept; 0 if none.
+  int first_attribute_line = 0;
 };
 
 //! A file's vertices and triangles, whatever they form: a point cloud, a soup, a non-manifold or

@@ -315,6 +315,16 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
   CHECK_THROWS_WITH(load_mesh(write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")),
                     Contains("line 4") && Contains("out of range"));
   CHECK_THROWS_WITH(load_mesh(write("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n")), Contains("declares 3 vertices and 1 faces, but only 12 bytes follow"));
+  // A COFF's colours are read past and reported (they were dropped without a word); plain OFF reports none.
+  {
+    LoadReport report;
+    load_soup(write("colours.off", "COFF\n3 1 0\n0 0 0\n1 0 0 0.9 0 0 1\n0 1 0\n3 0 1 2 1 0 0\n"), &report);
+    CHECK(report.first_attribute_line == 4);
+    load_soup(write("face-colour.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 1 0 0\n"), &report);
+    CHECK(report.first_attribute_line == 6);
+    load_soup(write("plain.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), &report);
+    CHECK(report.first_attribute_line == 0);
+  }
   // A face with two corners is named, not taken for a short file (the byte count assumed 3 corners).
   CHECK_THROWS_WITH(load_mesh(write("two.off", "OFF\n4 3 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n2 1 3\n3 1 3 2\n")),
                     Contains("face 1 has 2 corners"));

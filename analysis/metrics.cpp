@@ -324,7 +324,7 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
   return c;
 }
 
-std::string shape_change_warning(const ShapeChange& c) {
+std::string shape_change_warning(const ShapeChange& c, bool edit_scales) {
   std::string why;
   auto add = [&](const std::string& text) { why += (why.empty() ? "" : ", ") + text; };
   char text[160];
@@ -333,18 +333,18 @@ std::string shape_change_warning(const ShapeChange& c) {
                   c.largest_factor);
     add(text);
   }
-  if (c.area_ratio > 1.5 || c.area_ratio < 2.0 / 3) {
+  if (!edit_scales && (c.area_ratio > 1.5 || c.area_ratio < 2.0 / 3)) {
     std::snprintf(text, sizeof text, "the free region's area changed x%.3g", c.area_ratio);
     add(text);
   }
-  if (c.volume_change && std::abs(*c.volume_change) > 0.3) {
+  if (!edit_scales && c.volume_change && std::abs(*c.volume_change) > 0.3) {
     std::snprintf(text, sizeof text, "the volume changed by %+.0f %%", 100 * *c.volume_change);
     add(text);
   }
   if (why.empty()) return why;
   return "the result does not keep the shape's proportions: " + why +
          " (linear methods shrink or balloon under large rotations, space methods pinch or amplify between "
-         "handles close together; arap keeps them best)";
+         "handles close together)";
 }
 
 }  // namespace msd

@@ -203,8 +203,9 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
 //! Empty, or why the result lost the shape: an edge stretched or shrunk by more than 5× (tears and
 //! collapses; on the built-in benchmark the shell, Laplacian editing, lattice and cages do this under bends
 //! and twists, ARAP, gradient editing and deformation transfer stay below 4.5×), the free region's area
-//! changed by more than 1.5× or below 2/3, or a closed mesh's volume changed by more than 30 %.
-std::string shape_change_warning(const ShapeChange& change);
+//! changed by more than 1.5× or below 2/3, or a closed mesh's volume changed by more than 30 %. An edit that
+//! scales a handle (edit_scales) asks for area and volume to change: then only the edges count.
+std::string shape_change_warning(const ShapeChange& change, bool edit_scales = false);
 
 // ---------------------------------------------------------------------------------------------------
 // All metrics of one edit

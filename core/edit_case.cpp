@@ -62,7 +62,8 @@ EditCase weld_case(EditCase c, double eps) {
         first[w] = v;
       } else if (codes[w] != c.region.code(v)) {
         throw InvalidInput("weld: vertices " + std::to_string(first[w]) + " and " + std::to_string(v) +
-                           " are welded (within " + format_number(eps) + ") but have region labels " +
+                           " are welded (a chain of vertices each within " + format_number(eps) +
+                           " of the next joins them) but have region labels " +
                            std::to_string(codes[w]) + " and " + std::to_string(c.region.code(v)));
       }
     }

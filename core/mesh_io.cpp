@@ -153,6 +153,10 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
   if (off == std::string_view::npos || off > 3)
     reader.fail("not an OFF file: the first line must start with 'OFF' (or COFF, NOFF, ...), found '" +
                 printable(head.substr(0, 40)) + "'");
+  // 4OFF's fourth coordinate is a homogeneous w, nOFF's dimension is not 3: read as plain OFF, both are wrong.
+  if (head.substr(0, off).find_first_of("4n") != std::string_view::npos)
+    reader.fail("'" + printable(head.substr(0, off + 3)) + "' (homogeneous or n-dimensional coordinates) is not "
+                "supported; only OFF with 3 coordinates per vertex (and COFF, NOFF, STOFF) is");
   std::string_view glued = head.substr(off + 3);
   if (!glued.empty() && !std::isdigit(static_cast<unsigned char>(glued[0])))
     reader.fail("not an OFF file: the header '" + printable(head.substr(0, 40)) + "' is not OFF followed by counts");

@@ -173,7 +173,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
       if (progress) {
         char growth[96] = "";
         if (k > 0)
-          std::snprintf(growth, sizeof growth, ", x%.3g of the last (a plateau: below x%.3g)",
+          std::snprintf(growth, sizeof growth, ", x%.3g of the last (a plateau needs less than x%.3g)",
                         check.rms_height / previous_rms, options.plateau_growth);
         char line[256];
         std::snprintf(line, sizeof line, "detail scale candidate %d of at most %d: %.4g, rms detail height %.4g%s, %.1f s",
@@ -210,18 +210,18 @@ Positions LowPassCache::base(const Positions& S, const Faces& F, const LowPassOp
     return a.detail_scale == b.detail_scale && a.max_fold_ratio == b.max_fold_ratio &&
            a.plateau_growth == b.plateau_growth && a.max_scale_fraction == b.max_scale_fraction;
   };
-  if (!(valid_ && same(options, options_) && S.rows() == S_.rows() && F.rows() == F_.rows() && S == S_ && F == F_)) {
+  const bool hit =
+      valid_ && same(options, options_) && S.rows() == S_.rows() && F.rows() == F_.rows() && S == S_ && F == F_;
+  if (!hit) {
     LowPassReport r;
     Positions B = low_pass_base(S, F, options, &r, progress);  // throws before anything is replaced
     valid_ = false;
     S_ = S, F_ = F, B_ = std::move(B), options_ = options, report_ = std::move(r);
     valid_ = true;
-    if (report) *report = report_;
-    return B_;
   }
   if (report) {
     *report = report_;
-    report->reused = true;
+    report->reused = hit;
   }
   return B_;
 }

@@ -70,9 +70,12 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
   std::string self_intersections_refused;
   // A scan may intersect itself already: a result is judged by the pairs the edit added.
   std::vector<std::pair<int, int>> rest_pairs;  // (f, g), f < g, sorted
+  std::vector<char> touching_at_rest;            // per face: in a rest pair (its contacts may slide)
   if (options.self_intersections && has_faces) {
     try {
       count_self_intersections(rest, F, &rest_pairs);
+      touching_at_rest.assign(static_cast<size_t>(F.rows()), 0);
+      for (const auto& [f, g] : rest_pairs) touching_at_rest[f] = touching_at_rest[g] = 1;
     } catch (const InvalidInput& e) {
       self_intersections_refused = e.what();
     }
@@ -144,7 +147,8 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
             r.self_intersections = 0;
             r.rest_self_intersections = static_cast<int>(rest_pairs.size());
             for (const auto& [f, g] : pairs) {
-              if (std::binary_search(rest_pairs.begin(), rest_pairs.end(), std::pair{f, g})) continue;
+              // A pair with a face that intersected at rest is the input's contact, slid (an arm along a torso).
+              if (touching_at_rest[f] || touching_at_rest[g]) continue;
               ++r.self_intersections;
               r.self_intersecting_faces.push_back(f), r.self_intersecting_faces.push_back(g);
             }

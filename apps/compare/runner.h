@@ -28,7 +28,8 @@ struct MethodResult {
   Stats rigidity;
   //! Detail distortion, relative to the largest detail height; count 0 when not measured.
   Stats distortion;
-  //! Intersecting face pairs the edit added: pairs that do not intersect in the input (-1: not measured).
+  //! Intersecting face pairs the edit added: pairs of faces that intersect nothing in the input (a contact of
+  //! the input that slides stays the input's; -1: not measured).
   int self_intersections = -1;
   int rest_self_intersections = 0;      //!< intersecting face pairs of the input itself (not counted above)
   std::vector<int> self_intersecting_faces;  //!< the faces of the added pairs (rows of F, a face once per pair)

@@ -31,10 +31,18 @@ std::vector<std::string> default_scenes() {
 
 
 // One sphere around the rest shape and every result of a scene, so all its pictures share one camera.
+// A result whose box is more than 4 times the rest's across: it blew up, and framing or colouring the
+// others by it would leave their pictures empty (Laplacian editing at 1.5e9 times the area).
+bool exploded(const Positions& rest, const MethodResult& r) {
+  const double across = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm();
+  return (r.result.colwise().maxCoeff() - r.result.colwise().minCoeff()).norm() > 4 * across;
+}
+
 void framing_sphere(const Positions& rest, const std::vector<MethodResult>& results, Vec3& center, double& radius) {
   Vec3 lo = rest.colwise().minCoeff(), hi = rest.colwise().maxCoeff();
   for (const auto& r : results)
-    if (r.ok) lo = lo.cwiseMin(r.result.colwise().minCoeff().transpose()), hi = hi.cwiseMax(r.result.colwise().maxCoeff().transpose());
+    if (r.ok && !exploded(rest, r))
+      lo = lo.cwiseMin(r.result.colwise().minCoeff().transpose()), hi = hi.cwiseMax(r.result.colwise().maxCoeff().transpose());
   center = 0.5 * (lo + hi);
   radius = 0.5 * (hi - lo).norm();
 }
@@ -452,7 +460,7 @@ void add_compare_command(CLI::App& app) {
       auto has_distortion = [&](const MethodResult& r) { return r.ok && r.distortion_per_vertex.size() == rest.rows(); };
       double scalar_max = 0;
       for (const auto& r : results)
-        if (has_distortion(r)) scalar_max = std::max(scalar_max, robust_scalar_range(r.distortion_per_vertex).second);
+        if (has_distortion(r) && !exploded(rest, r)) scalar_max = std::max(scalar_max, robust_scalar_range(r.distortion_per_vertex).second);
       SceneOutput so{c.name, {}, {}};
       std::vector<Image> column;
       const std::string input_png = "images/" + c.name + "--input.png";

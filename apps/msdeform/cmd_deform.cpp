@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -167,7 +168,11 @@ void add_deform_command(CLI::App& app) {
     }
     if (report.folded_faces >= 0)
       std::printf("  folded triangles (normal turned against the deformed base's): %d\n", report.folded_faces);
-    const ShapeChange shape = shape_change(rest, out, c.F, c.region);
+    ShapeChange shape = shape_change(rest, out, c.F, c.region);
+    if (c.weld && shape.largest_vertex >= 0) {  // the file's numbering: the first file vertex of the welded one
+      const std::vector<int>& of = c.weld->welded_of;
+      shape.largest_vertex = static_cast<int>(std::find(of.begin(), of.end(), shape.largest_vertex) - of.begin());
+    }
     if (shape.edges > 0) {
       std::printf("  shape: %.3g %% of the free region's edges changed length beyond 1.5x (the most %.3gx, at vertex %d), "
                   "its area x%.3g", 100 * shape.stretched_share, shape.largest_factor, shape.largest_vertex, shape.area_ratio);
@@ -176,7 +181,15 @@ void add_deform_command(CLI::App& app) {
     }
     for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
       for (const std::string& w : *list) std::fprintf(stderr, "warning: %s\n", w.c_str());
-    if (const std::string w = shape_change_warning(shape); !w.empty()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    // An edit that scales a handle asks for area and volume to change.
+    const bool scales = std::any_of(c.transforms.begin(), c.transforms.end(), [](const Mat4& T) {
+      const Mat3 A = T.topLeftCorner<3, 3>();
+      return !(A.transpose() * A).isIdentity(1e-9);
+    });
+    if (const std::string w = shape_change_warning(shape, scales); !w.empty())
+      std::fprintf(stderr, "warning: %s%s\n", w.c_str(),
+                   deformer->name() == "arap" ? "; more ARAP iterations or a larger fixed region may help"
+                                              : "; arap keeps the proportions best");
     if (report.folded_faces > 0) std::fprintf(stderr, "advice: %s\n", fold_advice(*deformer).c_str());
     for (size_t k = 0; k < c.transforms.size(); ++k) {
       const double det = c.transforms[k].topLeftCorner<3, 3>().determinant();

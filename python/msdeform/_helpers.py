@@ -51,10 +51,11 @@ def rotation(axis, degrees, about=None):
             raise ValueError(f"axis must be 'x', 'y', 'z' or a 3-vector, got {axis!r}")
         axis = _AXES[axis.lower()]
     k = _vec3(axis, "axis")
-    length = np.linalg.norm(k)
-    if length == 0:
+    largest = np.max(np.abs(k))
+    if largest == 0:
         raise ValueError("axis must not be zero")
-    k = k / length
+    k = k / largest  # first: the length of a huge or tiny axis would overflow or underflow
+    k = k / np.linalg.norm(k)
     if not math.isfinite(float(degrees)):
         raise ValueError(f"degrees must be finite, got {degrees}")
     theta = math.radians(float(degrees))
@@ -64,7 +65,10 @@ def rotation(axis, degrees, about=None):
     T[:3, :3] = R
     if about is not None:
         c = _vec3(about, "about")
-        T[:3, 3] = c - R @ c
+        with np.errstate(over="ignore", invalid="ignore"):
+            T[:3, 3] = c - R @ c
+        if not np.all(np.isfinite(T)):
+            raise ValueError(f"about = {c} is too far out: the transform overflows")
     return T
 
 
@@ -77,7 +81,10 @@ def scaling(factor, about=None):
     T[:3, :3] = np.diag(f)
     if about is not None:
         c = _vec3(about, "about")
-        T[:3, 3] = c - f * c
+        with np.errstate(over="ignore", invalid="ignore"):
+            T[:3, 3] = c - f * c
+        if not np.all(np.isfinite(T)):
+            raise ValueError(f"about = {c} is too far out: the transform overflows")
     return T
 
 

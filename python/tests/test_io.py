@@ -150,3 +150,8 @@ def test_transform_helpers_refuse_non_finite_values():
         msdeform.scaling(float("inf"))
     with pytest.raises(ValueError, match="t must be finite"):
         msdeform.translation((0, float("nan"), 0))
+    # Huge and tiny axes are directions too (a huge one gave the identity, a tiny one "axis must not be zero").
+    for axis in ((1e308, 1e308, 0), (1e-200, 1e-200, 0)):
+        np.testing.assert_allclose(msdeform.rotation(axis, 90), msdeform.rotation((1, 1, 0), 90), atol=1e-15)
+    with pytest.raises(ValueError, match="too far out"):
+        msdeform.scaling(3, about=(1e308, 0, 0))

@@ -312,6 +312,7 @@ TEST_CASE("shape change: lengths, area and volume around the free region, and wh
   CHECK(doubled.area_ratio == Approx(4));
   CHECK(*doubled.volume_change == Approx(7));
   CHECK_THAT(shape_change_warning(doubled), Contains("area changed x4") && Contains("volume changed by +700 %"));
+  CHECK(shape_change_warning(doubled, /*edit_scales=*/true).empty());  // a scaling edit asks for it
   // One vertex pulled far out: a torn edge, named by its vertex.
   Positions torn = s.P;
   torn.row(100) *= 20;

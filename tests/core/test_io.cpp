@@ -315,6 +315,11 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
   CHECK_THROWS_WITH(load_mesh(write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")),
                     Contains("line 4") && Contains("out of range"));
   CHECK_THROWS_WITH(load_mesh(write("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n")), Contains("declares 3 vertices and 1 faces, but only 12 bytes follow"));
+  // 4OFF's w was read as a colour (a bounding box twice too large); nOFF was "missing the face count".
+  CHECK_THROWS_WITH(load_soup(write("h.off", "4OFF\n3 1 0\n0 0 0 2\n2 0 0 2\n0 2 0 2\n3 0 1 2\n")),
+                    Contains("'4OFF' (homogeneous or n-dimensional coordinates) is not supported"));
+  CHECK_THROWS_WITH(load_soup(write("n.off", "nOFF\n3\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")),
+                    Contains("'nOFF'"));
   // A COFF's colours are read past and reported (they were dropped without a word); plain OFF reports none.
   {
     LoadReport report;

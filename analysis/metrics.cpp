@@ -295,18 +295,10 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
     throw InvalidInput(std::string(who) + ": rest, deformed and region differ in their vertex counts");
   check_mesh_arrays(rest, F, who);
   ShapeChange c;
-  double rest_area = 0, area = 0;
   long stretched = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    bool touches_free = false;
-    for (int k = 0; k < 3; ++k) touches_free |= region.code(F(f, k)) == Region::kFree;
-    if (!touches_free) continue;
-    const Vec3 a = rest.row(F(f, 0)), b = rest.row(F(f, 1)), d = rest.row(F(f, 2));
-    const Vec3 a1 = deformed.row(F(f, 0)), b1 = deformed.row(F(f, 1)), d1 = deformed.row(F(f, 2));
-    rest_area += 0.5 * (b - a).cross(d - a).norm();
-    area += 0.5 * (b1 - a1).cross(d1 - a1).norm();
-    // Each edge of a triangle with a free vertex; an interior edge is seen from both of its triangles,
-    // which weights the share alike for every edge and leaves the largest factor unchanged.
+    // Each edge with a free vertex, seen from its triangles: an interior edge is seen twice, which weights
+    // the share alike for every edge and leaves the largest factor unchanged.
     for (int k = 0; k < 3; ++k) {
       const int i = F(f, k), j = F(f, (k + 1) % 3);
       if (region.code(i) != Region::kFree && region.code(j) != Region::kFree) continue;
@@ -318,8 +310,10 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
       if (factor > c.largest_factor) c.largest_factor = factor, c.largest_vertex = region.code(i) == Region::kFree ? i : j;
     }
   }
-  if (c.edges > 0) c.stretched_share = static_cast<double>(stretched) / static_cast<double>(c.edges);
-  if (rest_area > 0) c.area_ratio = area / rest_area;
+  if (c.edges > 0) {
+    c.stretched_share = static_cast<double>(stretched) / static_cast<double>(c.edges);
+    c.area_ratio = free_area_ratio(rest, deformed, F, region);
+  }
   if (F.rows() > 0) c.volume_change = volume_change(rest, deformed, F);
   return c;
 }

@@ -8,6 +8,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/region.h"
 #include "msdeform/core/parallel.h"
 
 namespace msd {
@@ -136,6 +137,16 @@ Eigen::VectorXd face_areas(const Positions& P, const Faces& F) {
     }
   });
   return A;
+}
+
+double free_area_ratio(const Positions& rest, const Positions& deformed, const Faces& F, const Region& region) {
+  double before = 0, after = 0;
+  const Eigen::VectorXd a = face_areas(rest, F), b = face_areas(deformed, F);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    if (region.code(F(f, 0)) == Region::kFree || region.code(F(f, 1)) == Region::kFree ||
+        region.code(F(f, 2)) == Region::kFree)
+      before += a[f], after += b[f];
+  return before > 0 ? after / before : a.sum() > 0 ? b.sum() / a.sum() : 1.0;
 }
 
 SparseMatrix gradient_operator(const Positions& P, const Faces& F) {

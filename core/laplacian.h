@@ -87,6 +87,11 @@ double signed_volume(const Positions& P, const Faces& F);
 //! #F triangle areas.
 Eigen::VectorXd face_areas(const Positions& P, const Faces& F);
 
+class Region;
+//! Area of (deformed, F) over the area of (rest, F) on the triangles with a free vertex of region (all of
+//! them when none is free; 1 when they have no area). rest, deformed: #V by 3. Indices are not checked here.
+double free_area_ratio(const Positions& rest, const Positions& deformed, const Faces& F, const Region& region);
+
 //! Per-face gradient of piecewise-linear functions: 3#F by #V; rows 3f..3f+2 give the gradient on face f.
 //! Degenerate faces get zero rows.
 SparseMatrix gradient_operator(const Positions& P, const Faces& F);

@@ -65,17 +65,6 @@ std::string check_decomposition(const DecompositionReport& r, const Decompositio
          "); an edit that bends the base further may fold them: " + remedy(r);
 }
 
-// Area of B over the area of S on the triangles with a free vertex (all of them when none is free).
-double free_area_ratio(const Positions& S, const Positions& B, const Faces& F, const Region& region) {
-  double rest = 0, base = 0;
-  const Eigen::VectorXd a = face_areas(S, F), b = face_areas(B, F);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    if (region.code(F(f, 0)) == Region::kFree || region.code(F(f, 1)) == Region::kFree ||
-        region.code(F(f, 2)) == Region::kFree)
-      rest += a[f], base += b[f];
-  return rest > 0 ? base / rest : a.sum() > 0 ? b.sum() / a.sum() : 1.0;
-}
-
 // Remeshes B (the low-pass base) and moves the roles onto it. A remeshed base must stay as close to S as
 // B is (up to 1 % of the diagonal): an edge length beyond the base's curvature radius cuts the shape
 // (measured: edge 2 on the survey cylinder of radius 1 folds 765 triangles).

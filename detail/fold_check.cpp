@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numeric>
 #include <string>
 
 #include "msdeform/core/errors.h"
@@ -58,6 +59,27 @@ int orientation(const phong::Columns& A, const int* ta, const phong::Columns& B,
   return (d > 0) - (d < 0);
 }
 
+// Cosine of the angle between the normals of ta and tb (0 where either triangle is degenerate).
+double normal_cosine(const phong::Columns& A, const int* ta, const phong::Columns& B, const int* tb) {
+  const Vec3 a = unit_scale_normal(A, ta), b = unit_scale_normal(B, tb);
+  const double lengths = a.norm() * b.norm();
+  return lengths > 0 ? a.dot(b) / lengths : 0.0;
+}
+
+// Rest normals closer to perpendicular than this (cosine) are counted in every frame: rounding of the
+// placed vertices could turn them.
+constexpr double kNearPerpendicular = 1e-6;
+
+// A map x ↦ A x + t with AᵀA = s²I (s > 0) to within 1e-12 relative: it scales every normal by s² and turns
+// it by one orthogonal map, so it keeps the sign of any product of normals it moves together.
+bool is_similarity(const Mat4& T) {
+  const Mat3 A = T.topLeftCorner<3, 3>();
+  const Mat3 M = A.transpose() * A;
+  const double s2 = M.trace() / 3;
+  if (!(s2 > 0) || !std::isfinite(s2)) return false;
+  return (M - s2 * Mat3::Identity()).cwiseAbs().maxCoeff() <= 1e-12 * s2;
+}
+
 }  // namespace
 
 void FoldCheck::prepare(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) {
@@ -74,6 +96,7 @@ void FoldCheck::prepare(const Positions& S, const Faces& Fs, const Positions& B,
   if (!shared) query = std::make_unique<ClosestPointQuery>(B, Fb);
   reference_.resize(shared ? 0 : Fs.rows());
   rest_sign_.assign(Fs.rows(), 0);
+  near_perpendicular_.assign(Fs.rows(), 0);
   const phong::Columns s(S), b(B);
   for (Eigen::Index f = 0; f < Fs.rows(); ++f) {
     int r = static_cast<int>(f);
@@ -82,10 +105,74 @@ void FoldCheck::prepare(const Positions& S, const Faces& Fs, const Positions& B,
       r = reference_[f] = query->query(centroid).face;
     }
     rest_sign_[f] = static_cast<signed char>(orientation(s, &Fs(f, 0), b, &Fb(r, 0)));
+    near_perpendicular_[f] = std::abs(normal_cosine(s, &Fs(f, 0), b, &Fb(r, 0))) < kNearPerpendicular;
+  }
+  order_.resize(Fs.rows());
+  std::iota(order_.begin(), order_.end(), 0);
+  groups_.assign(1, Group{Region::kFree, 0, static_cast<long>(Fs.rows())});
+}
+
+void FoldCheck::set_placements(const Region& s_region, const Region& b_region) {
+  const char* who = "FoldCheck::set_placements";
+  if (num_base_vertices_ < 0) throw UsageError(std::string(who) + " before prepare()");
+  if (s_region.num_vertices() != num_vertices_ || b_region.num_vertices() != num_base_vertices_)
+    throw UsageError(std::string(who) + ": the regions have " + std::to_string(s_region.num_vertices()) +
+                     " and " + std::to_string(b_region.num_vertices()) + " vertices, S and B " +
+                     std::to_string(num_vertices_) + " and " + std::to_string(num_base_vertices_));
+  // Back to S's order, then grouped by the code all six corners share (kFree where they do not).
+  const long n = static_cast<long>(order_.size());
+  Faces faces(n, 3);
+  Eigen::VectorXi reference(shared_ ? 0 : n);
+  std::vector<signed char> rest_sign(n);
+  for (long i = 0; i < n; ++i) {
+    const int t = order_[i];
+    faces.row(t) = faces_.row(i);
+    if (!shared_) reference[t] = reference_[i];
+    rest_sign[t] = rest_sign_[i];
+  }
+  const Faces& base_faces = shared_ ? faces : base_faces_;
+  std::vector<int> code(n);
+  for (long t = 0; t < n; ++t) {
+    const int* corners = &faces(t, 0);
+    const int* base_corners = &base_faces(shared_ ? t : reference[t], 0);
+    int c = s_region.code(corners[0]);
+    for (int k = 0; k < 3; ++k)
+      if (s_region.code(corners[k]) != c || b_region.code(base_corners[k]) != c) c = Region::kFree;
+    code[t] = near_perpendicular_[t] ? Region::kFree : c;
+  }
+  std::iota(order_.begin(), order_.end(), 0);
+  std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) {
+    // kFree first, then fixed, then the handles in order
+    const int ka = code[a] == Region::kFree ? -1 : code[a], kb = code[b] == Region::kFree ? -1 : code[b];
+    return ka < kb;
+  });
+  groups_.clear();
+  for (long i = 0; i < n; ++i) {
+    const int t = order_[i];
+    faces_.row(i) = faces.row(t);
+    if (!shared_) reference_[i] = reference[t];
+    rest_sign_[i] = rest_sign[t];
+    if (groups_.empty() || groups_.back().code != code[t]) groups_.push_back(Group{code[t], i, i});
+    groups_.back().end = i + 1;
   }
 }
 
-int FoldCheck::count(const Positions& S_deformed, const Positions& B_deformed) const {
+bool FoldCheck::counted(const Group& g, const std::vector<Mat4>& transforms) const {
+  if (g.code == Region::kFree || transforms.empty()) return true;
+  if (g.code == Region::kFixed) return false;
+  const size_t k = static_cast<size_t>(g.code - Region::kFirstHandle);
+  return k >= transforms.size() || !is_similarity(transforms[k]);
+}
+
+long FoldCheck::skipped(const std::vector<Mat4>& transforms) const {
+  long n = 0;
+  for (const Group& g : groups_)
+    if (!counted(g, transforms)) n += g.end - g.begin;
+  return n;
+}
+
+int FoldCheck::count(const Positions& S_deformed, const Positions& B_deformed,
+                     const std::vector<Mat4>& transforms) const {
   if (num_base_vertices_ < 0) throw UsageError("FoldCheck::count before prepare()");
   if (B_deformed.rows() != num_base_vertices_ || S_deformed.rows() != num_vertices_)
     throw UsageError("FoldCheck::count: S' or B' has the wrong number of rows");
@@ -94,29 +181,45 @@ int FoldCheck::count(const Positions& S_deformed, const Positions& B_deformed) c
   const int* const fb = shared_ ? fs : base_faces_.data();
   const int* const ref = shared_ ? nullptr : reference_.data();
   const signed char* const rest = rest_sign_.data();
-  std::atomic<int> folded{0}, unsure{0};
-  parallel_for_chunks(static_cast<long>(faces_.rows()), [=, &folded, &unsure](long begin, long end) {
-    int n = 0, u = 0;
-    for (long f = begin; f < end; ++f) {
-      // Folded when the orientation changed sign: (n_S' · n_B') · rest < 0. Branch-free: a data-dependent
-      // branch per triangle (skip the uncounted ones, compare signs) costs half of the pass. A product that
-      // is zero, subnormal or not finite (a collapsed triangle, or sizes beyond 1e±77) is unsure.
-      const double d = dot_of_normals(s, fs + 3 * f, b, fb + 3 * (ref ? ref[f] : f));
-      n += d * rest[f] < 0;
-      u += (rest[f] != 0) & !normal_range(d);
+  // Runs of consecutive counted groups, each triangle once.
+  const auto for_each_run = [&](auto run) {
+    for (size_t g = 0; g < groups_.size();) {
+      if (!counted(groups_[g], transforms)) {
+        ++g;
+        continue;
+      }
+      const long begin = groups_[g].begin;
+      while (g < groups_.size() && counted(groups_[g], transforms)) ++g;
+      run(begin, groups_[g - 1].end);
     }
-    folded += n;
-    unsure += u;
+  };
+  std::atomic<int> folded{0}, unsure{0};
+  for_each_run([&](long first, long last) {
+    parallel_for_chunks(last - first, [=, &folded, &unsure](long begin, long end) {
+      int n = 0, u = 0;
+      for (long f = first + begin; f < first + end; ++f) {
+        // Folded when the orientation changed sign: (n_S' · n_B') · rest < 0. Branch-free: a data-dependent
+        // branch per triangle (skip the uncounted ones, compare signs) costs half of the pass. A product
+        // that is zero, subnormal or not finite (a collapsed triangle, or sizes beyond 1e±77) is unsure.
+        const double d = dot_of_normals(s, fs + 3 * f, b, fb + 3 * (ref ? ref[f] : f));
+        n += d * rest[f] < 0;
+        u += (rest[f] != 0) & !normal_range(d);
+      }
+      folded += n;
+      unsure += u;
+    });
   });
   if (unsure == 0) return folded;
   // Rare: the pass again, deciding the unsure triangles from normals scaled to unit size.
   int recount = 0;
-  for (long f = 0; f < static_cast<long>(faces_.rows()); ++f) {
-    if (rest[f] == 0) continue;
-    const int* tb = fb + 3 * (ref ? ref[f] : f);
-    const double d = dot_of_normals(s, fs + 3 * f, b, tb);
-    recount += normal_range(d) ? d * rest[f] < 0 : orientation(s, fs + 3 * f, b, tb) == -rest[f];
-  }
+  for_each_run([&](long first, long last) {
+    for (long f = first; f < last; ++f) {
+      if (rest[f] == 0) continue;
+      const int* tb = fb + 3 * (ref ? ref[f] : f);
+      const double d = dot_of_normals(s, fs + 3 * f, b, tb);
+      recount += normal_range(d) ? d * rest[f] < 0 : orientation(s, fs + 3 * f, b, tb) == -rest[f];
+    }
+  });
   return recount;
 }
 

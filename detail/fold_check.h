@@ -7,6 +7,7 @@
 
 #include <vector>
 
+#include "msdeform/core/region.h"
 #include "msdeform/core/types.h"
 
 namespace msd {
@@ -19,17 +20,49 @@ class FoldCheck {
   //! cotan_laplacian: their orientation is rounding noise) are not counted. \throw InvalidInput for an index
   //! out of range.
   void prepare(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb);
+  //! Lets count() skip the triangles the edit moves rigidly with their base. `s_region` (#Vs codes) and
+  //! `b_region` (#Vb codes) say where the edit places each vertex of S' and B' itself: a triangle of S whose
+  //! three corners, and the three corners of its base triangle, are all fixed or all in one handle k turns
+  //! with B' by one map x ↦ A x + t. Where that map is a similarity (AᵀA = s²I, s > 0: rotations,
+  //! reflections, uniform scales, translations; fixed vertices: the identity), cof(A) scales every normal
+  //! by s² and turns it by one orthogonal map, so n_S' · n_B' = s⁴ n_S · n_B keeps its rest sign and the
+  //! triangle cannot fold. Triangles whose rest normals are within 1e-6 (cosine) of perpendicular are
+  //! always counted: there rounding of B' could decide. Valid only if the placed vertices of S' and B' sit
+  //! exactly (to rounding) at T_k p, as the multi-scale deformer and exact-constraint base deformers put
+  //! them. Call after prepare(); a new prepare() counts every triangle again. \throw UsageError before
+  //! prepare() or for regions of the wrong size.
+  void set_placements(const Region& s_region, const Region& b_region);
+
   //! Triangles of S' (#Vs by 3) whose orientation against B' (#Vb by 3) differs from the rest pose, right at
-  //! any finite size. O(#Fs), parallel, allocation-free (a second, serial pass only in a frame with a
-  //! collapsed triangle or sizes beyond 1e±77). \throw UsageError before prepare() or for wrong row counts.
-  int count(const Positions& S_deformed, const Positions& B_deformed) const;
+  //! any finite size. `transforms`: the frame's handle transforms (4×4 affine, handle k's at k), for the
+  //! skipping set_placements() allows; empty: every triangle is counted. O(#Fs), parallel, allocation-free (a
+  //! second, serial pass only in a frame with a collapsed triangle or sizes beyond 1e±77). \throw UsageError
+  //! before prepare() or for wrong row counts.
+  int count(const Positions& S_deformed, const Positions& B_deformed,
+            const std::vector<Mat4>& transforms = {}) const;
+
+  //! Triangles count() would skip under these transforms (the rigidly moved ones).
+  long skipped(const std::vector<Mat4>& transforms) const;
 
  private:
+  // One run of consecutive triangles (in the stored order) with one placement code (Region codes; kFree:
+  // not rigidly placed, always counted).
+  struct Group {
+    int code;
+    long begin, end;
+  };
+  bool counted(const Group& g, const std::vector<Mat4>& transforms) const;
+
   Faces faces_, base_faces_;                // base_faces_ and reference_ are empty when shared_
   long num_vertices_ = -1, num_base_vertices_ = -1;
   bool shared_ = false;                     // S and B share connectivity: triangle t lies over triangle t
   Eigen::VectorXi reference_;               // per triangle of S: its base triangle
   std::vector<signed char> rest_sign_;      // sign of n_S · n_B at rest (0: not counted)
+  // Triangles are stored grouped by placement code (set_placements), each group in S's order; before
+  // that, one group of every triangle. order_[i]: the triangle of S stored at i.
+  std::vector<Group> groups_;
+  std::vector<int> order_;
+  std::vector<char> near_perpendicular_;  // per triangle of S: rest normals within 1e-6 of perpendicular
 };
 
 }  // namespace msd

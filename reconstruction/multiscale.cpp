@@ -68,6 +68,10 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
   placed_.clear();
   for (int v : region.constrained_vertices()) placed_.emplace_back(v, region.handle_of(v));
   fold_check_.prepare(S, F, d.base, d.base_faces);
+  // Triangles the edit moves rigidly with their base cannot fold (FoldCheck::set_placements): where the
+  // base deformer puts B's constrained vertices at T_k p itself (not a refined control mesh).
+  if (!d.hierarchy && base_deformer_->traits().exact_constraints)
+    fold_check_.set_placements(region, d.edit_region);
 }
 
 void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
@@ -103,7 +107,7 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
     r.converged = r.converged && encoding_->last_converged();
   }
   for (const std::string& w : base.warnings) r.warnings.push_back(w);
-  r.folded_faces = fold_check_.count(out, base_deformed_);
+  r.folded_faces = fold_check_.count(out, base_deformed_, transforms);
   if (r.folded_faces > 0)
     r.warnings.push_back(name_ + ": " + std::to_string(r.folded_faces) + " triangles folded over the deformed base; " +
                          (d.hierarchy ? "a finer control mesh or the low-pass base keeps them apart"

@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/region.h"
 #include "msdeform/core/scenes.h"
 #include "msdeform/detail/fold_check.h"
 #include "msdeform/detail/normal_displacements.h"
@@ -90,4 +91,53 @@ TEST_CASE("fold check: right at any finite size (products of normals beyond 1e+-
     mirrored.col(0) *= -1;
     CHECK(folds.count(mirrored, B) == static_cast<int>(s.F.rows()));
   }
+}
+
+TEST_CASE("fold check: rigidly placed triangles are skipped only where the map keeps their sign",
+          "[detail][fold]") {
+  // One triangle, all three corners in handle 0. Its normal in S is (1, 1, 0), its base triangle's
+  // (1, -0.9, 0): n_S · n_B = 0.1 > 0 at rest.
+  Positions S(3, 3), B(3, 3);
+  S << 0, 0, 0, 0, 0, 1, 1, -1, 0;
+  B << 0, 0, 0, 0.9, 1, 0, 0, 0, 1;
+  Faces F(1, 3);
+  F << 0, 1, 2;
+  FoldCheck folds;
+  folds.prepare(S, F, B, F);
+  const Region handle(3, Region::kFirstHandle);
+  folds.set_placements(handle, handle);
+  const auto moved = [](const Positions& X, const Mat4& T) {
+    Positions Y(X.rows(), 3);
+    for (Eigen::Index i = 0; i < X.rows(); ++i) Y.row(i) = transform_point(T, Vec3(X.row(i)));
+    return Y;
+  };
+  // A rotation with a uniform scale and a translation: skipped, and indeed not folded.
+  Mat4 similarity = Mat4::Identity();
+  similarity.topLeftCorner<3, 3>() =
+      2.5 * Eigen::AngleAxisd(1.0, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  similarity.topRightCorner<3, 1>() = Vec3(4, -1, 2);
+  CHECK(folds.skipped({similarity}) == 1);
+  CHECK(folds.count(moved(S, similarity), moved(B, similarity), {similarity}) == 0);
+  CHECK(folds.count(moved(S, similarity), moved(B, similarity)) == 0);
+  // Stretching x tenfold turns the normals by cof(A) = diag(1, 10, 10): (1, 10, 0) · (1, -9, 0) < 0, a fold
+  // that a skip of every placed triangle would miss.
+  Mat4 stretch = Mat4::Identity();
+  stretch(0, 0) = 10;
+  CHECK(folds.skipped({stretch}) == 0);
+  CHECK(folds.count(moved(S, stretch), moved(B, stretch), {stretch}) == 1);
+  CHECK(folds.count(moved(S, stretch), moved(B, stretch)) == 1);
+  // Corners with different roles, in S or in B, are always counted.
+  Region mixed = handle;
+  mixed.set_free({2});
+  folds.set_placements(handle, mixed);
+  CHECK(folds.skipped({similarity}) == 0);
+  folds.set_placements(mixed, handle);
+  CHECK(folds.skipped({similarity}) == 0);
+  // Fixed corners are skipped whatever the transforms; no transforms: nothing is skipped.
+  const Region fixed(3, Region::kFixed);
+  folds.set_placements(fixed, fixed);
+  CHECK(folds.skipped({stretch}) == 1);
+  CHECK(folds.skipped({}) == 0);
+  CHECK(folds.count(S, B, {stretch}) == 0);
+  CHECK_THROWS_AS(folds.set_placements(Region(4), fixed), UsageError);
 }

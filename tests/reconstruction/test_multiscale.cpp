@@ -10,6 +10,7 @@
 #include "msdeform/deformation/arap.h"
 #include "msdeform/deformation/shell.h"
 #include "msdeform/detail/displacement_vectors.h"
+#include "msdeform/detail/fold_check.h"
 #include "msdeform/detail/normal_displacements.h"
 #include "msdeform/reconstruction/multiscale.h"
 #include "test_util.h"
@@ -423,4 +424,30 @@ TEST_CASE("multiscale: prepared again with another region, the base is reused an
   fresh.prepare(s.P, s.F, wider);
   CHECK(ms.base() == fresh.base());
   CHECK(ms.deform(s.transforms) == fresh.deform(s.transforms));
+}
+
+TEST_CASE("multiscale: the frame's fold count equals a count over every triangle",
+          "[reconstruction][multiscale]") {
+  // The frame skips the triangles its fixed and handle vertices move rigidly with B (FoldCheck::
+  // set_placements); a recount of all of them must agree, for rotations and for a non-similarity stretch.
+  int folds_seen = 0;
+  for (const char* name : {"lift", "bend120"}) {
+    const Scene s = scene(name);
+    MultiscaleDeformer ms;
+    ms.prepare(s.P, s.F, s.region);
+    // The scene's edit, a handle turned over (150° about x: the free region between folds), and a
+    // non-similarity (stretched along x, flattened and mirrored along z).
+    std::vector<Mat4> turned = s.transforms, stretched = s.transforms;
+    turned[0].topLeftCorner<3, 3>() = Eigen::AngleAxisd(150 * M_PI / 180, Vec3::UnitX()).toRotationMatrix();
+    stretched[0].topLeftCorner<3, 3>() *= Vec3(3, 1, -0.2).asDiagonal();
+    for (const std::vector<Mat4>& T : {s.transforms, turned, stretched}) {
+      const Positions out = ms.deform(T);
+      FoldCheck all;
+      all.prepare(s.P, s.F, ms.base(), ms.base_faces());
+      INFO(name << ": " << ms.frame_report().folded_faces << " folded");
+      CHECK(ms.frame_report().folded_faces == all.count(out, ms.deformed_base()));
+      folds_seen += ms.frame_report().folded_faces;
+    }
+  }
+  CHECK(folds_seen > 100);  // the turned handles fold 127 (lift) and 60 (bend120) triangles
 }

@@ -104,7 +104,8 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   // needle: some |cot| > kMaxCotangent) has a frame whose inverse amplifies the rounding of B' by up to
   // its cotangent (and, for the normal column, by 1/√area): it gets no frame of its own and borrows the
   // gradient of the nearest usable face (multi-source breadth-first search over faces sharing a vertex).
-  frame_inverse_.resize(nfb, 9);
+  using FaceMatrices = Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor>;
+  FaceMatrices frame_inverse(nfb, 9);  // V⁻¹ row-major, for usable faces
   frame_face_.setConstant(nfb, -1);
   std::vector<char> usable(nfb, 0), base_degenerate(nfb, 0);
   parallel_for_chunks(nfb, [&](long begin, long end) {
@@ -115,7 +116,7 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
       if (shape.degenerate || shape.needle_corners > 0) continue;
       const RowMat3 inverse = triangle_frame(a, b, c).inverse();
       if (!inverse.allFinite()) continue;
-      frame_inverse_.row(f) = Eigen::Map<const Eigen::Matrix<double, 1, 9>>(inverse.data());
+      frame_inverse.row(f) = Eigen::Map<const Eigen::Matrix<double, 1, 9>>(inverse.data());
       usable[f] = 1;
     }
   });
@@ -172,8 +173,7 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   // (Q_t S)_k = Σ_m w_km (s_k − s_m) uses edge vectors only, so it does not depend on where S sits.
   std::vector<Triplet> triplets;
   triplets.reserve(12 * nfs);
-  using FaceBlocks = Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor>;
-  FaceBlocks face_q = FaceBlocks::Zero(nfs, 9);
+  FaceMatrices face_q = FaceMatrices::Zero(nfs, 9);
   std::vector<int> parent(ns);
   std::iota(parent.begin(), parent.end(), 0);
   for (long t = 0; t < nfs; ++t) {
@@ -209,18 +209,23 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   triplets = std::vector<Triplet>();
 
   // Corners grouped by vertex, for a race-free per-vertex right-hand side.
-  {
-    VertexFaces corners = vertex_faces(Fs, static_cast<int>(ns));
-    corner_offsets_ = std::move(corners.offsets);
-    corner_face_ = std::move(corners.faces);
-  }
-  corner_q_.resize(corner_face_.size(), 3);
+  VertexFaces corners = vertex_faces(Fs, static_cast<int>(ns));
+  corner_offsets_ = std::move(corners.offsets);
+  // G_t q = V' (V⁻¹ q): each corner keeps u = V⁻¹ q of the base face its triangle takes, so a frame forms
+  // only the frames V' (q itself where the triangle has no base face: G = I).
+  corner_u_.resize(corners.faces.size(), 3);
+  corner_source_.resize(corners.faces.size());
   for (long v = 0; v < ns; ++v)
     for (int c = corner_offsets_[v]; c < corner_offsets_[v + 1]; ++c) {
-      const int t = corner_face_[c];
+      const int t = corners.faces[c], s = source_face_[t];
+      corner_source_[c] = s;
       const int k = Fs(t, 0) == v ? 0 : Fs(t, 1) == v ? 1 : 2;
-      corner_q_.row(c) = face_q.block<1, 3>(t, 3 * k);
+      const Vec3 q = face_q.block<1, 3>(t, 3 * k).transpose();
+      const Vec3 u = s >= 0 ? Vec3(Eigen::Map<const RowMat3>(frame_inverse.row(s).data()) * q) : q;
+      corner_u_.row(c) = u.transpose();
     }
+  frame_inverse = FaceMatrices();
+  face_q = FaceMatrices();
 
   // Constraints: the anchors, plus the lowest vertex of every component (over non-degenerate faces)
   // without one. (A face with a repeated vertex is degenerate, q = 0, so the corner lookup above may
@@ -275,7 +280,7 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
 
   face_normals_.setZero(nfb, 3);
   vertex_normals_.setZero(nb, 3);
-  gradient_.setZero(nfb, 9);
+  frame_.setZero(nfb, 9);
   rhs_.resize(system_.unknown().size(), 3);
   known_values_.resize(known.size(), 3);
   Box rest;
@@ -296,31 +301,32 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
                      " vertices, the encoded base had " + std::to_string(num_base_vertices_));
   check_finite(B_deformed, where, "the deformed base");
 
-  // G = V' V⁻¹ for the base faces the unknown vertices' triangles read.
+  // The frames V' of the base faces the unknown vertices' triangles read (G = V' V⁻¹, with V⁻¹ already
+  // folded into the corners' u).
+  const phong::Columns Bc(B_deformed);
   parallel_for_chunks(static_cast<long>(gradient_faces_.size()), [&](long begin, long end) {
     for (long k = begin; k < end; ++k) {
       const int f = gradient_faces_[k];
       const Mat3 V =
-          triangle_frame(Vec3(B_deformed.row(base_faces_(f, 0))), Vec3(B_deformed.row(base_faces_(f, 1))),
-                         Vec3(B_deformed.row(base_faces_(f, 2))));
-      const RowMat3 G = V * Eigen::Map<const RowMat3>(frame_inverse_.row(f).data());
-      gradient_.row(f) = Eigen::Map<const Eigen::Matrix<double, 1, 9>>(G.data());
+          triangle_frame(Bc.row(base_faces_(f, 0)), Bc.row(base_faces_(f, 1)), Bc.row(base_faces_(f, 2)));
+      Eigen::Map<RowMat3>(frame_.row(f).data()) = V;
     }
   });
 
-  // Reduced right-hand side Q_uu x_u = f_u − Q_uk x_k, f_i = Σ G_t (Q_t S)_k over the corners at vertex i.
+  // Reduced right-hand side Q_uu x_u = f_u − Q_uk x_k, f_i = Σ G_t (Q_t S)_k = Σ V'_t u_k over the corners
+  // at vertex i.
   const std::vector<int>& unknown = system_.unknown();
   parallel_for_chunks(static_cast<long>(unknown.size()), [&](long begin, long end) {
     for (long r = begin; r < end; ++r) {
       const int i = unknown[r];
       Vec3 sum = Vec3::Zero();
       for (int c = corner_offsets_[i]; c < corner_offsets_[i + 1]; ++c) {
-        const int s = source_face_[corner_face_[c]];
-        const Vec3 q = corner_q_.row(c).transpose();
+        const int s = corner_source_[c];
+        const Vec3 u = corner_u_.row(c).transpose();
         if (s >= 0)
-          sum += Eigen::Map<const RowMat3>(gradient_.row(s).data()) * q;
+          sum += Eigen::Map<const RowMat3>(frame_.row(s).data()) * u;
         else
-          sum += q;
+          sum += u;
       }
       rhs_.row(r) = sum.transpose();
     }
@@ -378,16 +384,25 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
   parallel_for_chunks(static_cast<long>(unknown.size()), [&](long begin, long end) {
     for (long r = begin; r < end; ++r) out.row(unknown[r]) = solution_.row(r) + centre;
   });
-  for (size_t k = 0; k < known.size(); ++k) out.row(known[k]) = known_values_.row(k) + centre;
-  check_result(B_deformed, out);
+  parallel_for_chunks(static_cast<long>(known.size()), [&](long begin, long end) {
+    for (long k = begin; k < end; ++k) out.row(known[k]) = known_values_.row(k) + centre;
+  });
+  check_result(B_deformed, centre, out);
   report_.seconds = seconds_since(t0);
 }
 
-void DeformationTransfer::check_result(const Positions& B_deformed, const Positions& out) const {
+void DeformationTransfer::check_result(const Positions& B_deformed, const Eigen::RowVector3d& centre,
+                                       const Positions& out) const {
   Box box;
   box.add(B_deformed);
-  for (int v : system_.known()) box.add(Vec3(out.row(v)));
+  if (known_values_.rows() > 0) {  // the Dirichlet values as placed in out (rounding is monotone: same box)
+    box.add(Vec3((known_values_.colwise().minCoeff() + centre).transpose()));
+    box.add(Vec3((known_values_.colwise().maxCoeff() + centre).transpose()));
+  }
   const double limit = kResultBound * (box.diagonal() + rest_extent_);
+  // Within the bound when the squared distance is below the squared bound (no square root per vertex);
+  // anything else (beyond it, not finite, or squares out of range) is measured exactly.
+  const double limit2 = limit * limit;
   // The worst vertex: not finite, else the farthest outside the box (lowest index on ties).
   std::mutex mutex;
   long worst = -1;
@@ -397,6 +412,7 @@ void DeformationTransfer::check_result(const Positions& B_deformed, const Positi
     double chunk_distance = 0;
     for (long i = begin; i < end; ++i) {
       const Vec3 p = out.row(i);
+      if ((p - p.cwiseMax(box.lo).cwiseMin(box.hi)).squaredNorm() < limit2) continue;
       const bool finite = p.allFinite();
       const double d = finite ? box.distance(p) : std::numeric_limits<double>::infinity();
       if ((!finite || d > limit) && (chunk_worst < 0 || d > chunk_distance)) {

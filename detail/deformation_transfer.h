@@ -36,10 +36,11 @@ namespace msd {
 //! (−W) x = −D (G ∇S) in msdeform's convention (W = cotan weights of S, D = divergence, D·∇ = W), per
 //! triangle Q_t x = G_t Q_t S with Q_t = −W_t. The right-hand side is linear in the G_t: row i is
 //! Σ G_t (Q_t S)_k over the corners k of the triangles t at vertex i, with (Q_t S)_k = Σ_m w_km (s_k − s_m)
-//! precomputed from edge vectors (independent of where S sits), so a frame costs one pass over the corners.
-//! Triangles of S follow cotan_laplacian()'s rule: degenerate ones are left out, and a needle's weight is
-//! bounded so that its largest |cot| is kMaxCotangent (all three cotangents scaled together, which keeps
-//! Q_t positive semi-definite; clamping them one by one would not). Matrix and right-hand side use the
+//! precomputed from edge vectors (independent of where S sits). encode() folds V⁻¹ in: G_t (Q_t S)_k =
+//! V'_t u_k with u_k = V_t⁻¹ (Q_t S)_k, so a frame forms only the frames V' and makes one pass over the
+//! corners. Triangles of S follow cotan_laplacian()'s rule: degenerate ones are left out, and a needle's
+//! weight is bounded so that its largest |cot| is kMaxCotangent (all three cotangents scaled together, which
+//! keeps Q_t positive semi-definite; clamping them one by one would not). Matrix and right-hand side use the
 //! same Q_t, so G = identity gives back S to rounding. The matrix depends on S only: it is factored once
 //! in encode() (ConstrainedQuadratic) and each frame back-substitutes three columns, solving for x − c
 //! with c the first Dirichlet value so the rounding scales with the mesh, not with its distance from the
@@ -99,20 +100,22 @@ class DeformationTransfer : public DetailEncoding {
   std::vector<std::string> encode_warnings() const override { return normal_.encode_warnings(); }
 
  private:
-  void check_result(const Positions& B_deformed, const Positions& out) const;
+  // out: S', with the Dirichlet values known_values_ + centre on the known rows.
+  void check_result(const Positions& B_deformed, const Eigen::RowVector3d& centre,
+                    const Positions& out) const;
 
   NormalDisplacements normal_;
   bool encoded_ = false;
   int num_base_vertices_ = 0;
   Faces base_faces_;
-  // Per base face: V⁻¹ (row-major 3×3) and the face whose frame it uses (itself unless degenerate).
-  Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> frame_inverse_;
+  // Per base face: the face whose frame it uses (itself unless degenerate or a needle).
   Eigen::VectorXi frame_face_;
   Eigen::VectorXi source_face_;      // per S face, already resolved through frame_face_ (−1: identity)
-  std::vector<int> gradient_faces_;  // base faces whose G a frame needs (sources of faces at unknowns)
-  // CSR corners of S by vertex: corner_face_[c] = the S face, corner_q_ row c = q_{t,k}.
-  std::vector<int> corner_offsets_, corner_face_;
-  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> corner_q_;
+  std::vector<int> gradient_faces_;  // base faces whose V' a frame needs (sources of faces at unknowns)
+  // CSR corners of S by vertex: corner_source_[c] = s, the source face of the corner's triangle t (−1:
+  // none), and corner_u_ row c = V_s⁻¹ q_{t,k} (q_{t,k} itself where s = −1).
+  std::vector<int> corner_offsets_, corner_source_;
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> corner_u_;
   ConstrainedQuadratic system_;
   double rest_extent_ = 0;  // diagonal of the bounding box of S ∪ B (the result check's detail allowance)
   // Base vertices whose normals the constrained vertices' Phong normals read, with their faces (CSR, in
@@ -122,7 +125,7 @@ class DeformationTransfer : public DetailEncoding {
   // Per-frame buffers.
   Positions vertex_normals_;  // #Vb by 3, only the rows of normal_vertices_ are kept up to date
   Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> face_normals_;  // rows of normal_face_list_
-  Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> gradient_;      // G per base face
+  Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> frame_;  // V' per base face (row-major 3×3)
   Eigen::MatrixXd rhs_, known_values_, solution_;  // reduced system: rows of system_.unknown()
 };
 

@@ -66,19 +66,22 @@ double normal_cosine(const phong::Columns& A, const int* ta, const phong::Column
   return lengths > 0 ? a.dot(b) / lengths : 0.0;
 }
 
-// Rest normals closer to perpendicular than this (cosine) are counted in every frame: rounding of the
-// placed vertices could turn them.
-constexpr double kNearPerpendicular = 1e-6;
-
-// A map x ↦ A x + t with AᵀA = s²I (s > 0) to within 1e-12 relative: it scales every normal by s² and turns
-// it by one orthogonal map, so it keeps the sign of any product of normals it moves together.
+// A map x ↦ A x + t whose AᵀA = s²(I + E) with s > 0 and every |E_ij| ≤ kSimilarity (a similarity as
+// written in a file with 6 or more digits). Normals move by cof(A), and cof(A)ᵀcof(A) = det(A)² (AᵀA)⁻¹ =
+// s⁴ det(I + E) (I + E)⁻¹: a product of two normals it moves together becomes s⁴ det(I + E) (n_a · n_b −
+// n_aᵀ E n_b + O(E²)), whose sign is n_a · n_b's wherever |cos(n_a, n_b)| > ‖E‖ (at most 3 kSimilarity).
+constexpr double kSimilarity = 1e-6;
 bool is_similarity(const Mat4& T) {
   const Mat3 A = T.topLeftCorner<3, 3>();
   const Mat3 M = A.transpose() * A;
   const double s2 = M.trace() / 3;
   if (!(s2 > 0) || !std::isfinite(s2)) return false;
-  return (M - s2 * Mat3::Identity()).cwiseAbs().maxCoeff() <= 1e-12 * s2;
+  return (M - s2 * Mat3::Identity()).cwiseAbs().maxCoeff() <= kSimilarity * s2;
 }
+
+// Triangles whose rest normals are closer to perpendicular than this (cosine) are counted in every frame
+// (300 times the most a similarity by the test above can move a cosine).
+constexpr double kNearPerpendicular = 1e-3;
 
 }  // namespace
 

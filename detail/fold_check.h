@@ -23,11 +23,14 @@ class FoldCheck {
   //! Lets count() skip the triangles the edit moves rigidly with their base. `s_region` (#Vs codes) and
   //! `b_region` (#Vb codes) say where the edit places each vertex of S' and B' itself: a triangle of S whose
   //! three corners, and the three corners of its base triangle, are all fixed or all in one handle k turns
-  //! with B' by one map x ↦ A x + t. Where that map is a similarity (AᵀA = s²I, s > 0: rotations,
-  //! reflections, uniform scales, translations; fixed vertices: the identity), cof(A) scales every normal
-  //! by s² and turns it by one orthogonal map, so n_S' · n_B' = s⁴ n_S · n_B keeps its rest sign and the
-  //! triangle cannot fold. Triangles whose rest normals are within 1e-6 (cosine) of perpendicular are
-  //! always counted: there rounding of B' could decide. Valid only if the placed vertices of S' and B' sit
+  //! with B' by one map x ↦ A x + t. Where that map is a similarity (AᵀA = s²I, s > 0, to 1e-6 relative:
+  //! rotations, reflections, uniform scales, translations, as written with 6 or more digits; fixed
+  //! vertices: the identity), cof(A) scales every normal by s² and turns it by one orthogonal map, so
+  //! n_S' · n_B' = s⁴ n_S · n_B keeps its rest sign and the triangle cannot fold. Triangles whose rest
+  //! normals are within 1e-3 (cosine) of perpendicular are always counted (the 1e-6 could decide there).
+  //! The count is then that of every triangle, except where the rounding of T_k p itself turns a skipped
+  //! triangle (coordinates some 1e13 times its size): counting it would report that noise as a fold, the
+  //! skip reports the rigid motion's answer, none. Valid only if the placed vertices of S' and B' sit
   //! exactly (to rounding) at T_k p, as the multi-scale deformer and exact-constraint base deformers put
   //! them. Call after prepare(); a new prepare() counts every triangle again. \throw UsageError before
   //! prepare() or for regions of the wrong size.

@@ -119,6 +119,15 @@ TEST_CASE("fold check: rigidly placed triangles are skipped only where the map k
   CHECK(folds.skipped({similarity}) == 1);
   CHECK(folds.count(moved(S, similarity), moved(B, similarity), {similarity}) == 0);
   CHECK(folds.count(moved(S, similarity), moved(B, similarity)) == 0);
+  // A rotation written with 6 digits, as in the survey's cylinder.def (AᵀA = I to 3e-7): still skipped;
+  // a stretch of 1e-5 is not.
+  Mat4 written = Mat4::Identity();
+  written.topLeftCorner<3, 3>() << -0.5, 0, -0.866025, 0, 1, 0, 0.866025, 0, -0.5;
+  CHECK(folds.skipped({written}) == 1);
+  CHECK(folds.count(moved(S, written), moved(B, written), {written}) == 0);
+  Mat4 slightly = Mat4::Identity();
+  slightly(1, 1) = 1 + 1e-5;
+  CHECK(folds.skipped({slightly}) == 0);
   // Stretching x tenfold turns the normals by cof(A) = diag(1, 10, 10): (1, 10, 0) · (1, -9, 0) < 0, a fold
   // that a skip of every placed triangle would miss.
   Mat4 stretch = Mat4::Identity();

@@ -144,6 +144,11 @@ TEST_CASE("extent_outlier_warning: a few strays far in edge lengths, not a coars
   const std::string w = extent_outlier_warning(strays, F, "t");
   CHECK_THAT(w, Catch::Contains(kOutlierWarning) && Catch::Contains("vertex 900 lies"));
   CHECK_FALSE(extent_outlier_warning(strays, Faces(), "t").empty());  // a point cloud: the box alone decides
+  // A stray that no face uses is named as such (a leftover of the file, not part of the surface).
+  Positions leftover(P.rows() + 1, 3);
+  leftover << P, Eigen::RowVector3d(5000, 0, 0);
+  CHECK_THAT(extent_outlier_warning(leftover, F, "t"),
+             Catch::Contains("vertex " + std::to_string(P.rows()) + ", which no face uses, lies"));
   // A cone of 32 ring vertices and an apex 30 away: the apex sets the box, but its edges are as long.
   Positions cone(34, 3);
   Faces sides(64, 3);

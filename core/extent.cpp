@@ -66,15 +66,12 @@ std::string extent_outlier_warning(const Positions& P, const Faces& F, const std
   }
   // A vertex no face uses is usually a leftover of the file, not part of the surface: say so.
   const bool used = F.rows() == 0 || (F.array() == static_cast<int>(farthest)).any();
-  return who + ": " + kOutlierWarning + ": its diagonal is " + format_number(diagonal) +
-         ", but without the " + std::to_string(k) +
-         " most extreme coordinate(s) at each end of each axis it is " + format_number(core) + " (vertex " +
-         std::to_string(farthest) + (used ? "" : ", which no face uses,") + " lies " +
-         format_number(distance) +
+  const std::string stray = "vertex " + std::to_string(farthest) + (used ? "" : ", which no face uses,");
+  return who + ": " + kOutlierWarning + ": its diagonal is " + format_number(diagonal) + ", but without the " +
+         std::to_string(k) + " most extreme coordinate(s) at each end of each axis it is " + format_number(core) +
+         " (" + stray + " lies " + format_number(distance) +
          " outside that box). Tolerances given in bounding-box diagonals (ARAP's and PriMo's stopping tests, "
-         "constraint errors) are " +
-         format_number(diagonal / core) +
-         " times looser than meant; remove the "
+         "constraint errors) are " + format_number(diagonal / core) + " times looser than meant; remove the "
          "outliers first";
 }
 

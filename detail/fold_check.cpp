@@ -7,6 +7,7 @@
 #include <memory>
 #include <numeric>
 #include <string>
+#include <utility>
 
 #include "msdeform/core/errors.h"
 #include "msdeform/core/laplacian.h"
@@ -122,40 +123,36 @@ void FoldCheck::set_placements(const Region& s_region, const Region& b_region) {
     throw UsageError(std::string(who) + ": the regions have " + std::to_string(s_region.num_vertices()) +
                      " and " + std::to_string(b_region.num_vertices()) + " vertices, S and B " +
                      std::to_string(num_vertices_) + " and " + std::to_string(num_base_vertices_));
-  // Back to S's order, then grouped by the code all six corners share (kFree where they do not).
+  // Each stored triangle's group: the code all six corners share (kFree where they do not).
   const long n = static_cast<long>(order_.size());
-  Faces faces(n, 3);
-  Eigen::VectorXi reference(shared_ ? 0 : n);
-  std::vector<signed char> rest_sign(n);
-  for (long i = 0; i < n; ++i) {
-    const int t = order_[i];
-    faces.row(t) = faces_.row(i);
-    if (!shared_) reference[t] = reference_[i];
-    rest_sign[t] = rest_sign_[i];
-  }
-  const Faces& base_faces = shared_ ? faces : base_faces_;
   std::vector<int> code(n);
-  for (long t = 0; t < n; ++t) {
-    const int* corners = &faces(t, 0);
-    const int* base_corners = &base_faces(shared_ ? t : reference[t], 0);
+  for (long i = 0; i < n; ++i) {
+    const int* corners = &faces_(i, 0);
+    const int* base_corners = shared_ ? corners : &base_faces_(reference_[i], 0);
     int c = s_region.code(corners[0]);
     for (int k = 0; k < 3; ++k)
       if (s_region.code(corners[k]) != c || b_region.code(base_corners[k]) != c) c = Region::kFree;
-    code[t] = near_perpendicular_[t] ? Region::kFree : c;
+    code[i] = near_perpendicular_[order_[i]] ? Region::kFree : c;
   }
-  std::iota(order_.begin(), order_.end(), 0);
-  std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) {
-    // kFree first, then fixed, then the handles in order
-    const int ka = code[a] == Region::kFree ? -1 : code[a], kb = code[b] == Region::kFree ? -1 : code[b];
-    return ka < kb;
-  });
+  // Stored again by group (kFree first, then fixed, then the handles in order), each group in S's order.
+  const auto group_key = [&](long i) {
+    return std::make_pair(code[i] == Region::kFree ? -1 : code[i], order_[i]);
+  };
+  std::vector<long> slot(n);
+  std::iota(slot.begin(), slot.end(), 0L);
+  std::sort(slot.begin(), slot.end(), [&](long a, long b) { return group_key(a) < group_key(b); });
+  const Faces faces = faces_;
+  const Eigen::VectorXi reference = reference_;
+  const std::vector<signed char> rest_sign = rest_sign_;
+  const std::vector<int> order = order_;
   groups_.clear();
   for (long i = 0; i < n; ++i) {
-    const int t = order_[i];
-    faces_.row(i) = faces.row(t);
-    if (!shared_) reference_[i] = reference[t];
-    rest_sign_[i] = rest_sign[t];
-    if (groups_.empty() || groups_.back().code != code[t]) groups_.push_back(Group{code[t], i, i});
+    const long j = slot[i];
+    faces_.row(i) = faces.row(j);
+    if (!shared_) reference_[i] = reference[j];
+    rest_sign_[i] = rest_sign[j];
+    order_[i] = order[j];
+    if (groups_.empty() || groups_.back().code != code[j]) groups_.push_back(Group{code[j], i, i});
     groups_.back().end = i + 1;
   }
 }

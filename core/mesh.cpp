@@ -5,6 +5,7 @@
 
 #include "msdeform/core/errors.h"
 #include "msdeform/core/parallel.h"
+#include "msdeform/core/vector_kernels.h"
 
 namespace msd {
 
@@ -112,18 +113,17 @@ VertexNormals::VertexNormals(const Faces& F, int num_vertices) {
     }
     offsets_.push_back(static_cast<int>(ring_.size()));
   }
+  plan(nullptr);
 }
 
 void VertexNormals::compute(const Positions& P, Positions& N) const {
   if (N.rows() != static_cast<Eigen::Index>(kind_.size())) N.resize(kind_.size(), 3);
-  double *nx = N.col(0).data(), *ny = N.col(1).data(), *nz = N.col(2).data();
-  compute_into(P, [=](long v, double x, double y, double z) { nx[v] = x, ny[v] = y, nz[v] = z; });
+  compute_into(P, N.data(), 1, N.rows());
 }
 
 void VertexNormals::compute(const Positions& P, RowPositions& N) const {
   if (N.rows() != static_cast<Eigen::Index>(kind_.size())) N.resize(kind_.size(), 3);
-  double* n = N.data();
-  compute_into(P, [=](long v, double x, double y, double z) { n[3 * v] = x, n[3 * v + 1] = y, n[3 * v + 2] = z; });
+  compute_into(P, N.data(), 3, 1);
 }
 
 void VertexNormals::restrict_to(std::vector<int> vertices) {
@@ -133,18 +133,94 @@ void VertexNormals::restrict_to(std::vector<int> vertices) {
       throw InvalidInput("VertexNormals::restrict_to: vertex list entry " + std::to_string(k) + " (" +
                          std::to_string(vertices[k]) + ") is out of range [0, " + std::to_string(num_vertices) +
                          ") or not ascending");
-  vertices_ = std::move(vertices);
-  subset_ = true;
+  plan(&vertices);
 }
 
-template <class Store>
-void VertexNormals::compute_into(const Positions& P, Store store) const {
-  const long count = subset_ ? static_cast<long>(vertices_.size()) : static_cast<long>(kind_.size());
-  const int* const subset = subset_ ? vertices_.data() : nullptr;
+namespace {
+
+#if MSD_HAVE_AVX2_KERNELS
+// Normals of the fan groups [g0, g1) of VertexNormals (lane_vertices_, lane_ring_, lane_offsets_), four
+// vertices per vector: compute_into's single-vertex operations lane by lane (no fused multiply-add), so the
+// same bits.
+MSD_AVX2 void fan_normals_x4(const double* px, const double* py, const double* pz, const int* vertices,
+                             const int* ring, const int* offsets, long g0, long g1, double* out, long vs, long cs) {
+  for (long g = g0; g < g1; ++g) {
+    const int* r = ring + offsets[g];
+    const int len = (offsets[g + 1] - offsets[g]) / 4;
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(vertices + 4 * g));
+    const __m256d x = _mm256_i32gather_pd(px, v, 8), y = _mm256_i32gather_pd(py, v, 8),
+                  z = _mm256_i32gather_pd(pz, v, 8);
+    __m128i j = _mm_loadu_si128(reinterpret_cast<const __m128i*>(r));
+    __m256d ax = _mm256_sub_pd(_mm256_i32gather_pd(px, j, 8), x), ay = _mm256_sub_pd(_mm256_i32gather_pd(py, j, 8), y),
+            az = _mm256_sub_pd(_mm256_i32gather_pd(pz, j, 8), z);
+    __m256d sx = _mm256_setzero_pd(), sy = sx, sz = sx;
+    for (int t = 1; t < len; ++t) {
+      j = _mm_loadu_si128(reinterpret_cast<const __m128i*>(r + 4 * t));
+      const __m256d bx = _mm256_sub_pd(_mm256_i32gather_pd(px, j, 8), x),
+                    by = _mm256_sub_pd(_mm256_i32gather_pd(py, j, 8), y),
+                    bz = _mm256_sub_pd(_mm256_i32gather_pd(pz, j, 8), z);
+      sx = _mm256_add_pd(sx, _mm256_sub_pd(_mm256_mul_pd(ay, bz), _mm256_mul_pd(az, by)));
+      sy = _mm256_add_pd(sy, _mm256_sub_pd(_mm256_mul_pd(az, bx), _mm256_mul_pd(ax, bz)));
+      sz = _mm256_add_pd(sz, _mm256_sub_pd(_mm256_mul_pd(ax, by), _mm256_mul_pd(ay, bx)));
+      ax = bx, ay = by, az = bz;
+    }
+    const __m256d norm = _mm256_sqrt_pd(
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(sx, sx), _mm256_mul_pd(sy, sy)), _mm256_mul_pd(sz, sz)));
+    // 1 / norm where norm > 0, else 0 (a NaN norm compares false, as in the single-vertex loop)
+    const __m256d inv =
+        _mm256_and_pd(_mm256_cmp_pd(norm, _mm256_setzero_pd(), _CMP_GT_OQ), _mm256_div_pd(_mm256_set1_pd(1.0), norm));
+    alignas(32) double n[3][4];
+    _mm256_store_pd(n[0], _mm256_mul_pd(sx, inv));
+    _mm256_store_pd(n[1], _mm256_mul_pd(sy, inv));
+    _mm256_store_pd(n[2], _mm256_mul_pd(sz, inv));
+    for (int i = 0; i < 4; ++i)
+      for (int c = 0; c < 3; ++c) out[vertices[4 * g + i] * vs + c * cs] = n[c][i];
+  }
+}
+#else
+void fan_normals_x4(const double*, const double*, const double*, const int*, const int*, const int*, long, long,
+                    double*, long, long) {}
+#endif
+
+}  // namespace
+
+void VertexNormals::plan(const std::vector<int>* subset) {
+  lane_vertices_.clear();
+  lane_ring_.clear();
+  lane_offsets_.assign(1, 0);
+  single_.clear();
+  const int count = subset ? static_cast<int>(subset->size()) : static_cast<int>(kind_.size());
+  // Fans wait by length until four have it, so a group's vertices stay close in the vertex order.
+  constexpr int kMaxLaneFan = 32;
+  std::vector<int> waiting[kMaxLaneFan];
+  for (int k = 0; k < count; ++k) {
+    const int v = subset ? (*subset)[k] : k;
+    const int len = offsets_[v + 1] - offsets_[v];
+    if (!cpu_has_avx2() || kind_[v] != kFan || len >= kMaxLaneFan) {
+      single_.push_back(v);
+      continue;
+    }
+    std::vector<int>& group = waiting[len];
+    group.push_back(v);
+    if (group.size() < 4) continue;
+    lane_vertices_.insert(lane_vertices_.end(), group.begin(), group.end());
+    for (int t = 0; t < len; ++t)
+      for (int u : group) lane_ring_.push_back(ring_[offsets_[u] + t]);
+    lane_offsets_.push_back(static_cast<int>(lane_ring_.size()));
+    group.clear();
+  }
+  for (const std::vector<int>& group : waiting) single_.insert(single_.end(), group.begin(), group.end());
+}
+
+void VertexNormals::compute_into(const Positions& P, double* out, long vs, long cs) const {
   const double *px = P.col(0).data(), *py = P.col(1).data(), *pz = P.col(2).data();
-  parallel_for_chunks(count, [&](long b, long e) {
+  const long groups = static_cast<long>(lane_offsets_.size()) - 1;
+  parallel_for_chunks(groups, [&](long b, long e) {
+    fan_normals_x4(px, py, pz, lane_vertices_.data(), lane_ring_.data(), lane_offsets_.data(), b, e, out, vs, cs);
+  }, 1024);
+  parallel_for_chunks(static_cast<long>(single_.size()), [&](long b, long e) {
     for (long k = b; k < e; ++k) {
-      const long v = subset ? subset[k] : k;
+      const long v = single_[k];
       const int* r = ring_.data() + offsets_[v];
       const int len = offsets_[v + 1] - offsets_[v];
       const double x = px[v], y = py[v], z = pz[v];
@@ -172,7 +248,7 @@ void VertexNormals::compute_into(const Positions& P, Store store) const {
       }
       const double norm = std::sqrt(sx * sx + sy * sy + sz * sz);
       const double inv = norm > 0 ? 1.0 / norm : 0.0;
-      store(v, sx * inv, sy * inv, sz * inv);
+      out[v * vs] = sx * inv, out[v * vs + cs] = sy * inv, out[v * vs + 2 * cs] = sz * inv;
     }
   });
 }

@@ -39,6 +39,8 @@ Positions vertex_normals(const Positions& P, const Faces& F);
 //! Area-weighted vertex normals for frame loops. The constructor orders each vertex's one-ring once; a
 //! compute() then sums (v_t − p) × (v_{t+1} − p) over consecutive ring neighbours (twice the area-weighted
 //! face normals) without any per-face intermediate: O(#V), parallel, allocation-free once N is sized.
+//! Where the CPU has AVX2, fans of equal length are summed four vertices at a time, with the same
+//! operations in the same order per vertex: the normals are the same to the last bit either way.
 class VertexNormals {
  public:
   VertexNormals() = default;
@@ -54,15 +56,19 @@ class VertexNormals {
   void compute(const Positions& P, RowPositions& N) const;
 
  private:
-  template <class Store>
-  void compute_into(const Positions& P, Store store) const;
+  // Writes vertex v's coordinate c to out[v · vertex_stride + c · coordinate_stride].
+  void compute_into(const Positions& P, double* out, long vertex_stride, long coordinate_stride) const;
+  // Sorts the vertices compute() writes into lanes_ and single_ (below).
+  void plan(const std::vector<int>* subset);
   enum Kind : unsigned char { kIsolated, kFan, kFacePairs };
   // Per vertex: its fan of neighbours (a closed fan repeats its first at the end) or the (j, k) pairs of
   // its faces where the one-ring is not a fan.
   std::vector<int> offsets_, ring_;
   std::vector<unsigned char> kind_;
-  std::vector<int> vertices_;  // the vertices compute() writes, when not all (subset_)
-  bool subset_ = false;
+  // The vertices compute() writes: fans summed four at a time (AVX2), group g being vertices
+  // lane_vertices_[4g .. 4g + 3], all with fans of one length, whose fans lane_ring_ holds interleaved from
+  // lane_offsets_[g] (position t of lane i at 4t + i); and the others one at a time (single_).
+  std::vector<int> lane_vertices_, lane_ring_, lane_offsets_, single_;
 };
 
 //! The faces around each vertex: faces[offsets[v] .. offsets[v + 1]) are the rows of F containing v,

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -73,6 +74,16 @@ TEST_CASE("VertexNormals equals the sum of area-weighted face normals", "[core][
     const bool in_subset = (v - 1) % 3 == 0 && v >= 1;
     CHECK((part.row(v) - (in_subset ? Positions(N.row(v)) : Positions::Constant(1, 3, 7.0))).cwiseAbs().maxCoeff() ==
           0.0);
+  }
+  // Fewer than four vertices of a fan length are summed one at a time, all of them four at a time where the
+  // CPU has AVX2: the same bits either way.
+  VertexNormals one(F, static_cast<int>(P.rows()));
+  for (int v = 0; v < std::min<int>(40, static_cast<int>(P.rows())); ++v) {
+    one.restrict_to({v});
+    Positions single = N;
+    single.row(v).setConstant(7.0);
+    one.compute(P, single);
+    CHECK((single.row(v) - N.row(v)).cwiseAbs().maxCoeff() == 0.0);
   }
   CHECK_THROWS_AS(some.restrict_to({0, static_cast<int>(P.rows())}), InvalidInput);
   CHECK_THROWS_AS(some.restrict_to({2, 1}), InvalidInput);

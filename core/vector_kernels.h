@@ -1,0 +1,30 @@
+#pragma once
+//! \file AVX2 kernels chosen at run time: the portable build (x86-64 baseline) compiles a frame loop's
+//! vector version with MSD_AVX2 and calls it where cpu_has_avx2() says the CPU runs it. The kernels do a
+//! scalar loop's operations lane by lane (no fused multiply-add), so results keep every bit.
+
+#include <cstdlib>
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#define MSD_HAVE_AVX2_KERNELS 1
+#define MSD_AVX2 __attribute__((target("avx2")))
+#else
+#define MSD_HAVE_AVX2_KERNELS 0
+#define MSD_AVX2
+#endif
+
+namespace msd {
+
+//! True where the CPU runs AVX2 code (always false off x86-64 or without GCC's builtins), unless the
+//! environment variable MSD_SCALAR_KERNELS is set (to compare the two, e.g. in the benchmarks).
+inline bool cpu_has_avx2() {
+#if MSD_HAVE_AVX2_KERNELS
+  static const bool has = __builtin_cpu_supports("avx2") && !std::getenv("MSD_SCALAR_KERNELS");
+  return has;
+#else
+  return false;
+#endif
+}
+
+}  // namespace msd

@@ -148,17 +148,15 @@ MSD_AVX2 void fan_normals_x4(const double* px, const double* py, const double* p
     const int* r = ring + offsets[g];
     const int len = (offsets[g + 1] - offsets[g]) / 4;
     const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(vertices + 4 * g));
-    const __m256d x = _mm256_i32gather_pd(px, v, 8), y = _mm256_i32gather_pd(py, v, 8),
-                  z = _mm256_i32gather_pd(pz, v, 8);
+    const __m256d x = gather(px, v), y = gather(py, v), z = gather(pz, v);
     __m128i j = _mm_loadu_si128(reinterpret_cast<const __m128i*>(r));
-    __m256d ax = _mm256_sub_pd(_mm256_i32gather_pd(px, j, 8), x), ay = _mm256_sub_pd(_mm256_i32gather_pd(py, j, 8), y),
-            az = _mm256_sub_pd(_mm256_i32gather_pd(pz, j, 8), z);
+    __m256d ax = _mm256_sub_pd(gather(px, j), x), ay = _mm256_sub_pd(gather(py, j), y),
+            az = _mm256_sub_pd(gather(pz, j), z);
     __m256d sx = _mm256_setzero_pd(), sy = sx, sz = sx;
     for (int t = 1; t < len; ++t) {
       j = _mm_loadu_si128(reinterpret_cast<const __m128i*>(r + 4 * t));
-      const __m256d bx = _mm256_sub_pd(_mm256_i32gather_pd(px, j, 8), x),
-                    by = _mm256_sub_pd(_mm256_i32gather_pd(py, j, 8), y),
-                    bz = _mm256_sub_pd(_mm256_i32gather_pd(pz, j, 8), z);
+      const __m256d bx = _mm256_sub_pd(gather(px, j), x), by = _mm256_sub_pd(gather(py, j), y),
+                    bz = _mm256_sub_pd(gather(pz, j), z);
       sx = _mm256_add_pd(sx, _mm256_sub_pd(_mm256_mul_pd(ay, bz), _mm256_mul_pd(az, by)));
       sy = _mm256_add_pd(sy, _mm256_sub_pd(_mm256_mul_pd(az, bx), _mm256_mul_pd(ax, bz)));
       sz = _mm256_add_pd(sz, _mm256_sub_pd(_mm256_mul_pd(ax, by), _mm256_mul_pd(ay, bx)));
@@ -188,28 +186,16 @@ void VertexNormals::plan(const std::vector<int>* subset) {
   lane_vertices_.clear();
   lane_ring_.clear();
   lane_offsets_.assign(1, 0);
-  single_.clear();
   const int count = subset ? static_cast<int>(subset->size()) : static_cast<int>(kind_.size());
-  // Fans wait by length until four have it, so a group's vertices stay close in the vertex order.
-  constexpr int kMaxLaneFan = 32;
-  std::vector<int> waiting[kMaxLaneFan];
-  for (int k = 0; k < count; ++k) {
-    const int v = subset ? (*subset)[k] : k;
-    const int len = offsets_[v + 1] - offsets_[v];
-    if (!cpu_has_avx2() || kind_[v] != kFan || len >= kMaxLaneFan) {
-      single_.push_back(v);
-      continue;
-    }
-    std::vector<int>& group = waiting[len];
-    group.push_back(v);
-    if (group.size() < 4) continue;
-    lane_vertices_.insert(lane_vertices_.end(), group.begin(), group.end());
-    for (int t = 0; t < len; ++t)
-      for (int u : group) lane_ring_.push_back(ring_[offsets_[u] + t]);
-    lane_offsets_.push_back(static_cast<int>(lane_ring_.size()));
-    group.clear();
-  }
-  for (const std::vector<int>& group : waiting) single_.insert(single_.end(), group.begin(), group.end());
+  single_ = group_in_fours(
+      count, subset ? subset->data() : nullptr,
+      [&](int v) { return kind_[v] == kFan ? offsets_[v + 1] - offsets_[v] : 0; },
+      [&](const int* four, int len) {
+        lane_vertices_.insert(lane_vertices_.end(), four, four + 4);
+        for (int t = 0; t < len; ++t)
+          for (int i = 0; i < 4; ++i) lane_ring_.push_back(ring_[offsets_[four[i]] + t]);
+        lane_offsets_.push_back(static_cast<int>(lane_ring_.size()));
+      });
 }
 
 void VertexNormals::compute_into(const Positions& P, double* out, long vs, long cs) const {

@@ -25,8 +25,7 @@ namespace msd {
 //!   tangent plane (not rotation-equivariant, but defined). A vertex without normal (no incident face of
 //!   positive area) gets the world frame (n, t1, t2) = (z, x, y): its detail is kept in world coordinates.
 //! Frames are a function of positions only; compute() is O(#V + #F), parallel, allocation-free once the
-//! outputs are sized. Where the CPU has AVX2, vertices with equally many faces get their frames four at a
-//! time in DisplacementVectors::reconstruct, with the same operations per vertex: the same bits.
+//! outputs are sized.
 class VertexFrames {
  public:
   VertexFrames() = default;
@@ -41,21 +40,11 @@ class VertexFrames {
 
  private:
   friend class DisplacementVectors;  // reconstructs from each frame as it is computed
-  // The vertices a visit_frames() call visits: group g of four, lanes.vertices[4g .. 4g + 3], all with the
-  // same number of incident faces, listed interleaved from lanes.faces[offsets[g]] (face t of lane i at
-  // 4t + i), their frames computed together (AVX2, where the CPU has it); the others one at a time.
-  struct Lanes {
-    std::vector<int> vertices, faces, offsets{0}, single;
-  };
-  //! Lanes for every vertex, or for `vertices` (ascending) when given.
-  Lanes lanes(const std::vector<int>* vertices) const;
-  //! Calls visit(v, n, t1, t2) for the vertices of `lanes`, in parallel chunks (P has #V rows); `faces`
-  //! (ascending) lists the faces around them when they are not all vertices.
+  //! Calls visit(v, n, t1, t2) for every vertex, or only for `vertices` when given (ascending, with
+  //! `faces` the ascending list of their incident faces), in parallel chunks (P has #V rows).
   template <class Visit>
-  void visit_frames(const Positions& P, Visit visit, const Lanes& lanes,
+  void visit_frames(const Positions& P, Visit visit, const std::vector<int>* vertices = nullptr,
                     const std::vector<int>* faces = nullptr) const;
-  //! Vertex v's frame from the face normals of the last visit_frames() pass.
-  void frame_of(long v, const Positions& P, Vec3& n, Vec3& t1, Vec3& t2) const;
 
   Faces F_;
   std::vector<int> face_offsets_{0}, incident_faces_;  // CSR: faces around each vertex
@@ -105,11 +94,9 @@ class DisplacementVectors : public DetailEncoding {
   VertexFrames frames_;
   bool encoded_ = false;
   Eigen::MatrixX3d coefficients_;
-  // The vertices a frame reconstructs (all but the placed ones) and, with placed vertices, the faces
-  // around them (local frames).
-  VertexFrames::Lanes frame_vertices_;
-  bool all_faces_ = true;
-  std::vector<int> frame_faces_;
+  // With placed vertices: the vertices a frame reconstructs and the faces around them (local frames).
+  bool all_vertices_ = true;
+  std::vector<int> frame_vertices_, frame_faces_;
 };
 
 }  // namespace msd

@@ -245,23 +245,6 @@ TEST_CASE("displacement vectors: placed vertices are skipped, the others reconst
       if (!is_placed[v]) differ += (out.row(v) - expected.row(v)).cwiseAbs().maxCoeff() != 0.0;
     CHECK(differ == 0);
   }
-  // A frame computes the frames four vertices at a time where the CPU has AVX2; VertexFrames::compute one at
-  // a time: eq. 9.8 from compute()'s frames is the frame's result bit for bit.
-  {
-    DisplacementVectors local;
-    local.encode(s.P, s.F, s.smooth, s.F);
-    Positions out, N, T1, T2;
-    local.reconstruct(Bd, out);
-    local.frames().compute(Bd, N, T1, T2);
-    const Eigen::MatrixX3d& c = local.coefficients();
-    int differ = 0;
-    for (int v = 0; v < s.P.rows(); ++v) {
-      const Vec3 p = Vec3(Bd.row(v)) +
-                     (c(v, 0) * Vec3(N.row(v)) + c(v, 1) * Vec3(T1.row(v)) + c(v, 2) * Vec3(T2.row(v)));
-      differ += (out.row(v) - p.transpose()).cwiseAbs().maxCoeff() != 0.0;
-    }
-    CHECK(differ == 0);
-  }
   // Local frames leave the placed rows as they are.
   DisplacementVectors local;
   local.set_placed_vertices(placed);

@@ -58,7 +58,7 @@ class VertexNormals {
  private:
   // Writes vertex v's coordinate c to out[v · vertex_stride + c · coordinate_stride].
   void compute_into(const Positions& P, double* out, long vertex_stride, long coordinate_stride) const;
-  // Sorts the vertices compute() writes into lanes_ and single_ (below).
+  // Sorts the vertices compute() writes (all, or subset) into the lanes and single_ below.
   void plan(const std::vector<int>* subset);
   enum Kind : unsigned char { kIsolated, kFan, kFacePairs };
   // Per vertex: its fan of neighbours (a closed fan repeats its first at the end) or the (j, k) pairs of

@@ -4,6 +4,7 @@
 //! scalar loop's operations lane by lane (no fused multiply-add), so results keep every bit.
 
 #include <cstdlib>
+#include <cstring>
 #include <vector>
 
 #if defined(__GNUC__) && defined(__x86_64__)
@@ -18,10 +19,14 @@
 namespace msd {
 
 //! True where the CPU runs AVX2 code (always false off x86-64 or without GCC's builtins), unless the
-//! environment variable MSD_SCALAR_KERNELS is set (to compare the two, e.g. in the benchmarks).
+//! environment variable MSD_SCALAR_KERNELS is set to anything but "" or "0" (to compare the two, e.g. in
+//! the benchmarks).
 inline bool cpu_has_avx2() {
 #if MSD_HAVE_AVX2_KERNELS
-  static const bool has = __builtin_cpu_supports("avx2") && !std::getenv("MSD_SCALAR_KERNELS");
+  static const bool has = [] {
+    const char* scalar = std::getenv("MSD_SCALAR_KERNELS");
+    return __builtin_cpu_supports("avx2") && !(scalar && *scalar && std::strcmp(scalar, "0") != 0);
+  }();
   return has;
 #else
   return false;

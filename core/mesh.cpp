@@ -175,9 +175,6 @@ MSD_AVX2 void fan_normals_x4(const double* px, const double* py, const double* p
       for (int c = 0; c < 3; ++c) out[vertices[4 * g + i] * vs + c * cs] = n[c][i];
   }
 }
-#else
-void fan_normals_x4(const double*, const double*, const double*, const int*, const int*, const int*, long, long,
-                    double*, long, long) {}
 #endif
 
 }  // namespace
@@ -186,24 +183,39 @@ void VertexNormals::plan(const std::vector<int>* subset) {
   lane_vertices_.clear();
   lane_ring_.clear();
   lane_offsets_.assign(1, 0);
+  single_.clear();
   const int count = subset ? static_cast<int>(subset->size()) : static_cast<int>(kind_.size());
-  single_ = group_in_fours(
-      count, subset ? subset->data() : nullptr,
-      [&](int v) { return kind_[v] == kFan ? offsets_[v + 1] - offsets_[v] : 0; },
-      [&](const int* four, int len) {
-        lane_vertices_.insert(lane_vertices_.end(), four, four + 4);
-        for (int t = 0; t < len; ++t)
-          for (int i = 0; i < 4; ++i) lane_ring_.push_back(ring_[offsets_[four[i]] + t]);
-        lane_offsets_.push_back(static_cast<int>(lane_ring_.size()));
-      });
+  // Fans wait by length until four have it, so a group's vertices stay close in the vertex order; face
+  // pairs, fans of 32 or more, the last few of each length and, without AVX2, all go one at a time.
+  constexpr int kMaxLaneFan = 32;
+  std::vector<int> waiting[kMaxLaneFan];
+  for (int k = 0; k < count; ++k) {
+    const int v = subset ? (*subset)[k] : k;
+    const int len = offsets_[v + 1] - offsets_[v];
+    if (!cpu_has_avx2() || kind_[v] != kFan || len >= kMaxLaneFan) {
+      single_.push_back(v);
+      continue;
+    }
+    std::vector<int>& four = waiting[len];
+    four.push_back(v);
+    if (four.size() < 4) continue;
+    lane_vertices_.insert(lane_vertices_.end(), four.begin(), four.end());
+    for (int t = 0; t < len; ++t)
+      for (int u : four) lane_ring_.push_back(ring_[offsets_[u] + t]);
+    lane_offsets_.push_back(static_cast<int>(lane_ring_.size()));
+    four.clear();
+  }
+  for (const std::vector<int>& rest : waiting) single_.insert(single_.end(), rest.begin(), rest.end());
 }
 
 void VertexNormals::compute_into(const Positions& P, double* out, long vs, long cs) const {
   const double *px = P.col(0).data(), *py = P.col(1).data(), *pz = P.col(2).data();
+#if MSD_HAVE_AVX2_KERNELS  // plan() makes no groups elsewhere
   const long groups = static_cast<long>(lane_offsets_.size()) - 1;
   parallel_for_chunks(groups, [&](long b, long e) {
     fan_normals_x4(px, py, pz, lane_vertices_.data(), lane_ring_.data(), lane_offsets_.data(), b, e, out, vs, cs);
   }, 1024);
+#endif
   parallel_for_chunks(static_cast<long>(single_.size()), [&](long b, long e) {
     for (long k = b; k < e; ++k) {
       const long v = single_[k];

@@ -5,7 +5,6 @@
 
 #include <cstdlib>
 #include <cstring>
-#include <vector>
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
@@ -31,31 +30,6 @@ inline bool cpu_has_avx2() {
 #else
   return false;
 #endif
-}
-
-//! Sorts items (items[0 .. count), or 0 .. count − 1 when items is null) into groups of four of one size for
-//! a kernel's four lanes: calls group(four items, size) for each, the members of a group close in the items'
-//! order (items wait by size until four have it), and returns the others: those of size(item) outside
-//! [1, 32), the last few of each size, and all of them where the CPU has no AVX2.
-template <class Size, class Group>
-std::vector<int> group_in_fours(int count, const int* items, Size size, Group group) {
-  constexpr int kMaxSize = 32;
-  std::vector<int> single, waiting[kMaxSize];
-  for (int k = 0; k < count; ++k) {
-    const int item = items ? items[k] : k;
-    const int s = cpu_has_avx2() ? size(item) : 0;
-    if (s <= 0 || s >= kMaxSize) {
-      single.push_back(item);
-      continue;
-    }
-    std::vector<int>& four = waiting[s];
-    four.push_back(item);
-    if (four.size() < 4) continue;
-    group(four.data(), s);
-    four.clear();
-  }
-  for (const std::vector<int>& w : waiting) single.insert(single.end(), w.begin(), w.end());
-  return single;
 }
 
 #if MSD_HAVE_AVX2_KERNELS

@@ -155,10 +155,10 @@ TEST_CASE("fold check: rigidly placed triangles are skipped only where the map k
   CHECK_THROWS_AS(folds.set_placements(Region(4), fixed), UsageError);
 }
 
-TEST_CASE("fold check: the count equals a triangle-by-triangle count on a crumpled surface (vector pass)",
+TEST_CASE("fold check: the count equals a triangle-by-triangle count on a crumpled surface",
           "[detail][fold]") {
-  // Random moves of S' fold about a third of the triangles, with runs of every length: the count (four
-  // triangles at a time where the CPU has AVX2) must equal the sign test written out per triangle.
+  // Random moves of S' fold about a quarter of the triangles, scattered: the branch-free pass over the stored
+  // triangles must equal the sign test written out per triangle.
   const auto reference_count = [](const Positions& S, const Positions& S1, const Faces& Fs, const Positions& B,
                                   const Positions& B1, const Faces& Fb, const std::vector<int>& base_of) {
     const auto normal = [](const Positions& X, const Faces& F, long f) {

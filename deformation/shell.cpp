@@ -1,5 +1,6 @@
 #include "msdeform/deformation/shell.h"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -72,17 +73,43 @@ void ShellDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
   double* o = out.data();
   const double* m = frame_matrix_.data();  // column-major (4h) x 3
   const long mrows = frame_matrix_.rows();
-  // One pass per coordinate and chunk: handle 0's four columns are fused with the rest position (one
-  // write per output), further handles add theirs. A chunk's columns stay in L2 across the coordinates.
+  // One pass per coordinate and chunk: handle 0's columns are fused with the rest position (one write per
+  // output), further handles add theirs. A chunk's columns stay in L2 across the coordinates. A column
+  // whose weight is zero is not read: a translation reads one column of four, and a coordinate no handle
+  // moves is the rest position (the terms left out are ±0, so every sum is the same value).
   parallel_for_chunks(n, [&](long begin, long end) {
     for (int d = 0; d < 3; ++d) {
       double* od = o + d * n;
       const double* rest = f + d * n;
       for (int k = 0; k < nh; ++k) {
         const double* w = m + d * mrows + 4 * k;
-        const double *c0 = f + (3 + 4 * k) * n, *c1 = c0 + n, *c2 = c1 + n, *c3 = c2 + n;
+        const double* c[4];
+        double cw[4];
+        int nc = 0;
+        for (int j = 0; j < 4; ++j)
+          if (w[j] != 0) {
+            c[nc] = f + (3 + 4 * k + j) * n;
+            cw[nc++] = w[j];
+          }
         const double* base = k == 0 ? rest : od;
-        for (long i = begin; i < end; ++i) od[i] = base[i] + c0[i] * w[0] + c1[i] * w[1] + c2[i] * w[2] + c3[i] * w[3];
+        switch (nc) {
+          case 0:
+            if (k == 0) std::copy(rest + begin, rest + end, od + begin);
+            break;
+          case 1:
+            for (long i = begin; i < end; ++i) od[i] = base[i] + c[0][i] * cw[0];
+            break;
+          case 2:
+            for (long i = begin; i < end; ++i) od[i] = base[i] + c[0][i] * cw[0] + c[1][i] * cw[1];
+            break;
+          case 3:
+            for (long i = begin; i < end; ++i)
+              od[i] = base[i] + c[0][i] * cw[0] + c[1][i] * cw[1] + c[2][i] * cw[2];
+            break;
+          default:
+            for (long i = begin; i < end; ++i)
+              od[i] = base[i] + c[0][i] * cw[0] + c[1][i] * cw[1] + c[2][i] * cw[2] + c[3][i] * cw[3];
+        }
       }
     }
   }, 1 << 14);

@@ -146,6 +146,46 @@ TEST_CASE("shell: the basis path agrees with a direct solve for random affine ha
   }
 }
 
+TEST_CASE(
+    "shell: handles with zero weights (translations, untouched coordinates) give the full basis product",
+    "[deformation][shell]") {
+  // deform() leaves out the basis columns whose weight is zero; the result must equal p + Σ_k B_k [A_k − I |
+  // t_k]ᵀ with every term, value for value, whichever weights are zero.
+  const Scene s = small_scene("lift");
+  Region region = s.region;
+  std::vector<int> disc;
+  for (int v : s.region.free_vertices())
+    if ((Vec3(s.P.row(v)) - Vec3(0.5, 0.5, 0)).head<2>().norm() < 0.08) disc.push_back(v);
+  region.set_handle(disc, 1);
+  ShellDeformer shell;
+  shell.prepare(s.P, s.F, region);
+  const Eigen::MatrixXd basis = shell.basis();
+  std::mt19937 rng(5);
+  std::bernoulli_distribution keep(0.5);
+  int checked = 0;
+  for (int trial = 0; trial < 24; ++trial) {
+    std::vector<Mat4> T = {random_affine(rng, 0.5), random_affine(rng, 0.5)};
+    for (Mat4& t : T)  // A − I and t with random zero entries; trial 0: identities, trial 1: translations
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c)
+          if (trial == 0 || (trial == 1 && c < 3) || !keep(rng)) t(r, c) = r == c ? 1.0 : 0.0;
+    Positions out;
+    shell.deform(T, out);
+    Positions expected = s.P;
+    for (int k = 0; k < 2; ++k)
+      for (int d = 0; d < 3; ++d)
+        for (Eigen::Index v = 0; v < s.P.rows(); ++v) {
+          double sum = expected(v, d);
+          for (int j = 0; j < 4; ++j) sum += basis(v, 4 * k + j) * (T[k](d, j) - (j == d ? 1.0 : 0.0));
+          expected(v, d) = sum;
+        }
+    INFO("trial " << trial);
+    CHECK((out.array() == expected.array()).all());
+    ++checked;
+  }
+  CHECK(checked == 24);
+}
+
 TEST_CASE("shell: a mirror-symmetric scene gives a mirror-symmetric result", "[deformation][shell]") {
   // Unit square, each cell split into 4 triangles around its centre: symmetric under y -> 1 - y.
   const int n = 16;

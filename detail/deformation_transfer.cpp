@@ -32,10 +32,19 @@ struct Box {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
-  void add(const Positions& P) {
-    if (P.rows() == 0) return;
-    lo = lo.cwiseMin(P.colwise().minCoeff().transpose());
-    hi = hi.cwiseMax(P.colwise().maxCoeff().transpose());
+  // Grown by the rows of P shifted by `shift`, in one pass on both cores.
+  void add(const Positions& P, const Eigen::RowVector3d& shift = Eigen::RowVector3d::Zero()) {
+    std::mutex mutex;
+    parallel_for_chunks(
+        static_cast<long>(P.rows()),
+        [&](long begin, long end) {
+          Box chunk;
+          for (long i = begin; i < end; ++i) chunk.add(Vec3((P.row(i) + shift).transpose()));
+          std::lock_guard<std::mutex> lock(mutex);
+          add(chunk.lo);
+          add(chunk.hi);
+        },
+        1 << 16);
   }
   // Norms that do not overflow for coordinates near DBL_MAX (a finite B' can have them).
   double diagonal() const { return (hi - lo).stableNorm(); }
@@ -96,7 +105,6 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
 
   encoded_ = false;  // stays so if anything below throws
   Report report;
-  normal_.encode(S, Fs, B, Fb);
   base_faces_ = Fb;
   num_base_vertices_ = static_cast<int>(nb);
 
@@ -208,27 +216,8 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   Q.setFromTriplets(triplets.begin(), triplets.end());
   triplets = std::vector<Triplet>();
 
-  // Corners grouped by vertex, for a race-free per-vertex right-hand side.
-  VertexFaces corners = vertex_faces(Fs, static_cast<int>(ns));
-  corner_offsets_ = std::move(corners.offsets);
-  // G_t q = V' (V⁻¹ q): each corner keeps u = V⁻¹ q of the base face its triangle takes, so a frame forms
-  // only the frames V' (q itself where the triangle has no base face: G = I).
-  corner_u_.resize(corners.faces.size(), 3);
-  corner_source_.resize(corners.faces.size());
-  for (long v = 0; v < ns; ++v)
-    for (int c = corner_offsets_[v]; c < corner_offsets_[v + 1]; ++c) {
-      const int t = corners.faces[c], s = source_face_[t];
-      corner_source_[c] = s;
-      const int k = Fs(t, 0) == v ? 0 : Fs(t, 1) == v ? 1 : 2;
-      const Vec3 q = face_q.block<1, 3>(t, 3 * k).transpose();
-      const Vec3 u = s >= 0 ? Vec3(Eigen::Map<const RowMat3>(frame_inverse.row(s).data()) * q) : q;
-      corner_u_.row(c) = u.transpose();
-    }
-  frame_inverse = FaceMatrices();
-  face_q = FaceMatrices();
-
   // Constraints: the anchors, plus the lowest vertex of every component (over non-degenerate faces)
-  // without one. (A face with a repeated vertex is degenerate, q = 0, so the corner lookup above may
+  // without one. (A face with a repeated vertex is degenerate, q = 0, so the corner lookup below may
   // pick either of its corners for that vertex.)
   std::vector<char> component_anchored(ns, 0);
   for (int a : anchors) component_anchored[find_root(parent, a)] = 1;
@@ -241,46 +230,53 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
       report.pinned_vertices.push_back(static_cast<int>(v));
     }
   }
-  system_.prepare(Q, known);
-
-  // What a frame needs: gradients of the base faces that triangles at unknown vertices read, and normals
-  // of the base vertices around the constrained vertices' base points.
   std::vector<char> is_known(ns, 0);
   for (int v : known) is_known[v] = 1;
-  std::vector<char> needed(nfb, 0);
-  for (long t = 0; t < nfs; ++t)
-    if (source_face_[t] >= 0 && !(is_known[Fs(t, 0)] && is_known[Fs(t, 1)] && is_known[Fs(t, 2)]))
-      needed[source_face_[t]] = 1;
-  gradient_faces_.clear();
-  for (long f = 0; f < nfb; ++f)
-    if (needed[f]) gradient_faces_.push_back(static_cast<int>(f));
-  std::vector<char> needs_normal(nb, 0);
-  for (int v : known)
-    for (int k = 0; k < 3; ++k) needs_normal[Fb(normal_.base_faces()[v], k)] = 1;
-  {
-    const VertexFaces star = vertex_faces(Fb, static_cast<int>(nb));
-    const std::vector<int>&offsets = star.offsets, &around = star.faces;
-    std::vector<char> face_needed(nfb, 0);
-    normal_vertices_.clear();
-    normal_offsets_.assign(1, 0);
-    normal_faces_.clear();
-    for (long v = 0; v < nb; ++v)
-      if (needs_normal[v]) {
-        normal_vertices_.push_back(static_cast<int>(v));
-        for (int i = offsets[v]; i < offsets[v + 1]; ++i) {
-          normal_faces_.push_back(around[i]);
-          face_needed[around[i]] = 1;
-        }
-        normal_offsets_.push_back(static_cast<int>(normal_faces_.size()));
-      }
-    normal_face_list_.clear();
-    for (long f = 0; f < nfb; ++f)
-      if (face_needed[f]) normal_face_list_.push_back(static_cast<int>(f));
-  }
 
-  face_normals_.setZero(nfb, 3);
-  vertex_normals_.setZero(nb, 3);
-  frame_.setZero(nfb, 9);
+  // The corners of the unknown vertices, by row of the reduced system (ConstrainedQuadratic orders the
+  // unknowns ascending), for a race-free right-hand side row by row. G_t q = V' (V⁻¹ q): each corner keeps
+  // u = V⁻¹ q of the base face its triangle takes, so a frame forms only the frames V' (q itself where the
+  // triangle has no base face: G = I). The base faces the corners read get frame slots in the order the
+  // rows first read them, so the right-hand side reads the frames nearly in the order a frame writes them.
+  {
+    const VertexFaces corners = vertex_faces(Fs, static_cast<int>(ns));
+    long num_corners = 0;
+    for (long v = 0; v < ns; ++v)
+      if (!is_known[v]) num_corners += corners.offsets[v + 1] - corners.offsets[v];
+    corner_u_.resize(num_corners, 3);
+    corner_source_.resize(num_corners);
+    corner_offsets_.assign(1, 0);
+    slot_faces_.clear();
+    std::vector<int> slot(nfb, -1);
+    int c = 0;
+    for (long v = 0; v < ns; ++v) {
+      if (is_known[v]) continue;
+      for (int j = corners.offsets[v]; j < corners.offsets[v + 1]; ++j, ++c) {
+        const int t = corners.faces[j], s = source_face_[t];
+        const int k = Fs(t, 0) == v ? 0 : Fs(t, 1) == v ? 1 : 2;
+        const Vec3 q = face_q.block<1, 3>(t, 3 * k).transpose();
+        const Vec3 u = s >= 0 ? Vec3(Eigen::Map<const RowMat3>(frame_inverse.row(s).data()) * q) : q;
+        corner_u_.row(c) = u.transpose();
+        if (s >= 0 && slot[s] < 0) {
+          slot[s] = static_cast<int>(slot_faces_.size());
+          slot_faces_.push_back(s);
+        }
+        corner_source_[c] = s >= 0 ? slot[s] : -1;
+      }
+      corner_offsets_.push_back(c);
+    }
+  }
+  frame_inverse = FaceMatrices();
+  face_q = FaceMatrices();
+
+  system_.prepare(Q, known);
+
+  // The Dirichlet values are the constrained vertices' normal-displacement reconstruction: normal_ places
+  // only those (every other vertex is "placed" by the solve), with B' normals only where they read them.
+  normal_.set_placed_vertices(system_.unknown());
+  normal_.encode(S, Fs, B, Fb);
+
+  frame_.setZero(static_cast<long>(slot_faces_.size()), 9);
   rhs_.resize(system_.unknown().size(), 3);
   known_values_.resize(known.size(), 3);
   Box rest;
@@ -304,12 +300,12 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
   // The frames V' of the base faces the unknown vertices' triangles read (G = V' V⁻¹, with V⁻¹ already
   // folded into the corners' u).
   const phong::Columns Bc(B_deformed);
-  parallel_for_chunks(static_cast<long>(gradient_faces_.size()), [&](long begin, long end) {
+  parallel_for_chunks(static_cast<long>(slot_faces_.size()), [&](long begin, long end) {
     for (long k = begin; k < end; ++k) {
-      const int f = gradient_faces_[k];
+      const int f = slot_faces_[k];
       const Mat3 V =
           triangle_frame(Bc.row(base_faces_(f, 0)), Bc.row(base_faces_(f, 1)), Bc.row(base_faces_(f, 2)));
-      Eigen::Map<RowMat3>(frame_.row(f).data()) = V;
+      Eigen::Map<RowMat3>(frame_.row(k).data()) = V;
     }
   });
 
@@ -318,55 +314,30 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
   const std::vector<int>& unknown = system_.unknown();
   parallel_for_chunks(static_cast<long>(unknown.size()), [&](long begin, long end) {
     for (long r = begin; r < end; ++r) {
-      const int i = unknown[r];
-      Vec3 sum = Vec3::Zero();
-      for (int c = corner_offsets_[i]; c < corner_offsets_[i + 1]; ++c) {
+      // Scalar sums in registers: Eigen's 3×3 product kept the sum on the stack and stalled on reloading it.
+      double x = 0, y = 0, z = 0;
+      for (int c = corner_offsets_[r]; c < corner_offsets_[r + 1]; ++c) {
         const int s = corner_source_[c];
-        const Vec3 u = corner_u_.row(c).transpose();
-        if (s >= 0)
-          sum += Eigen::Map<const RowMat3>(frame_.row(s).data()) * u;
-        else
-          sum += u;
+        const double* u = corner_u_.row(c).data();
+        if (s >= 0) {
+          const double* V = frame_.row(s).data();  // row-major V'
+          x += V[0] * u[0] + V[1] * u[1] + V[2] * u[2];
+          y += V[3] * u[0] + V[4] * u[1] + V[5] * u[2];
+          z += V[6] * u[0] + V[7] * u[1] + V[8] * u[2];
+        } else {
+          x += u[0], y += u[1], z += u[2];
+        }
       }
-      rhs_.row(r) = sum.transpose();
+      rhs_(r, 0) = x, rhs_(r, 1) = y, rhs_(r, 2) = z;
     }
   });
 
-  // Dirichlet values: the normal-displacement reconstruction b' + h n' of the constrained vertices, with
-  // B' vertex normals (area weighted, as VertexNormals) only where their Phong normals need them.
-  parallel_for_chunks(static_cast<long>(normal_face_list_.size()), [&](long begin, long end) {
-    for (long k = begin; k < end; ++k) {
-      const int f = normal_face_list_[k];
-      const Vec3 p0 = B_deformed.row(base_faces_(f, 0)), p1 = B_deformed.row(base_faces_(f, 1)),
-                 p2 = B_deformed.row(base_faces_(f, 2));
-      face_normals_.row(f) = (p1 - p0).cross(p2 - p0).transpose();  // length 2 · area: area weighting
-    }
-  });
-  parallel_for_chunks(static_cast<long>(normal_vertices_.size()), [&](long begin, long end) {
-    for (long k = begin; k < end; ++k) {
-      Vec3 n = Vec3::Zero();
-      for (int c = normal_offsets_[k]; c < normal_offsets_[k + 1]; ++c)
-        n += face_normals_.row(normal_faces_[c]);
-      const double len = n.norm();
-      vertex_normals_.row(normal_vertices_[k]) = (len > 0 ? Vec3(n / len) : Vec3::Zero()).transpose();
-    }
-  });
+  // Dirichlet values: the normal-displacement reconstruction b' + h n' of the constrained vertices, written
+  // into their rows of out.
+  normal_.reconstruct(B_deformed, out);  // sizes out to #Vs rows
   const std::vector<int>& known = system_.known();
-  const Eigen::VectorXi& face = normal_.base_faces();
-  const Eigen::MatrixX3d& bary = normal_.barycentrics();
-  const Eigen::VectorXd& height = normal_.heights();
   parallel_for_chunks(static_cast<long>(known.size()), [&](long begin, long end) {
-    for (long k = begin; k < end; ++k) {
-      const int i = known[k], f = face[i];
-      const Vec3 w = bary.row(i);
-      const Vec3 b = w[0] * Vec3(B_deformed.row(base_faces_(f, 0))) +
-                     w[1] * Vec3(B_deformed.row(base_faces_(f, 1))) +
-                     w[2] * Vec3(B_deformed.row(base_faces_(f, 2)));
-      known_values_.row(k) =
-          (b + height[i] * phong::direction(phong::Columns(B_deformed), phong::Columns(vertex_normals_),
-                                            &base_faces_(f, 0), w))
-              .transpose();
-    }
+    for (long k = begin; k < end; ++k) known_values_.row(k) = out.row(known[k]);
   });
 
   // Solve for x − c with c the first Dirichlet value: Q's rows sum to zero, so the shift changes only the
@@ -379,13 +350,8 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
     rhs_.noalias() -= system_.coupling() * known_values_;
     system_.solver().solve(rhs_, solution_);
   }
-  const long ns = static_cast<long>(unknown.size() + known.size());
-  if (out.rows() != ns) out.resize(ns, 3);
   parallel_for_chunks(static_cast<long>(unknown.size()), [&](long begin, long end) {
     for (long r = begin; r < end; ++r) out.row(unknown[r]) = solution_.row(r) + centre;
-  });
-  parallel_for_chunks(static_cast<long>(known.size()), [&](long begin, long end) {
-    for (long k = begin; k < end; ++k) out.row(known[k]) = known_values_.row(k) + centre;
   });
   check_result(B_deformed, centre, out);
   report_.seconds = seconds_since(t0);
@@ -395,10 +361,7 @@ void DeformationTransfer::check_result(const Positions& B_deformed, const Eigen:
                                        const Positions& out) const {
   Box box;
   box.add(B_deformed);
-  if (known_values_.rows() > 0) {  // the Dirichlet values as placed in out (rounding is monotone: same box)
-    box.add(Vec3((known_values_.colwise().minCoeff() + centre).transpose()));
-    box.add(Vec3((known_values_.colwise().maxCoeff() + centre).transpose()));
-  }
+  box.add(known_values_, centre);  // the Dirichlet values (to rounding: out holds them unshifted)
   const double limit = kResultBound * (box.diagonal() + rest_extent_);
   // Within the bound when the squared distance is below the squared bound (no square root per vertex);
   // anything else (beyond it, not finite, or squares out of range) is measured exactly.

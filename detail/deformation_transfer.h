@@ -50,7 +50,9 @@ namespace msd {
 //! and handle vertices) are placed at their normal-displacement reconstruction b'_i + h_i n'_i on B'
 //! (= B' exactly where S = B, as on the deformer's constrained vertices). A connected component of S
 //! without an anchor — e.g. all of S when no anchors are given — has its lowest-indexed vertex pinned the
-//! same way, so the system is positive definite (report().pinned_vertices).
+//! same way, so the system is positive definite (report().pinned_vertices). The values come from
+//! normal_displacements(), encoded to reconstruct only these constrained vertices (its placed vertices are
+//! the others), with B' normals only where they read them.
 //!
 //! Result check: before returning, reconstruct() verifies that every vertex of S' is finite and within
 //! 2 × (diagonal of B' ∪ Dirichlet values + diagonal of S ∪ B) of the bounding box of B' ∪ Dirichlet
@@ -86,8 +88,9 @@ class DeformationTransfer : public DetailEncoding {
 
   //! S' (#Vs by 3) for the deformed base B' (#Vb by 3, connectivity Fb), in the units of B'.
   //! \throw UsageError before encode() or when B' does not have #Vb rows; InvalidInput if B' has a
-  //! non-finite coordinate; SolverError (index() = the vertex) if a vertex of S' is not finite or lies
-  //! beyond the bound above (out then holds no usable result).
+  //! non-finite coordinate, or as NormalDisplacements::reconstruct() if a Dirichlet value overflows;
+  //! SolverError (index() = the vertex) if a vertex of S' is not finite or lies beyond the bound above (out
+  //! then holds no usable result).
   void reconstruct(const Positions& B_deformed, Positions& out) override;
 
   bool encoded() const { return encoded_; }
@@ -100,7 +103,7 @@ class DeformationTransfer : public DetailEncoding {
   std::vector<std::string> encode_warnings() const override { return normal_.encode_warnings(); }
 
  private:
-  // out: S', with the Dirichlet values known_values_ + centre on the known rows.
+  // out: S'; known_values_ + centre: its Dirichlet values (to rounding).
   void check_result(const Positions& B_deformed, const Eigen::RowVector3d& centre,
                     const Positions& out) const;
 
@@ -111,21 +114,19 @@ class DeformationTransfer : public DetailEncoding {
   // Per base face: the face whose frame it uses (itself unless degenerate or a needle).
   Eigen::VectorXi frame_face_;
   Eigen::VectorXi source_face_;      // per S face, already resolved through frame_face_ (−1: identity)
-  std::vector<int> gradient_faces_;  // base faces whose V' a frame needs (sources of faces at unknowns)
-  // CSR corners of S by vertex: corner_source_[c] = s, the source face of the corner's triangle t (−1:
-  // none), and corner_u_ row c = V_s⁻¹ q_{t,k} (q_{t,k} itself where s = −1).
+  // Frame slots: slot_faces_[k] is the base face whose V' a frame writes to frame_ row k (the faces the
+  // unknown vertices' triangles read, in the order the right-hand side first reads them).
+  std::vector<int> slot_faces_;
+  // CSR corners of S by row r of the reduced system (unknown vertex r): corner_source_[c] = the frame slot
+  // of the source face s of the corner's triangle t (−1: none), and corner_u_ row c = V_s⁻¹ q_{t,k} (q_{t,k}
+  // itself where s = −1).
   std::vector<int> corner_offsets_, corner_source_;
   Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> corner_u_;
   ConstrainedQuadratic system_;
   double rest_extent_ = 0;  // diagonal of the bounding box of S ∪ B (the result check's detail allowance)
-  // Base vertices whose normals the constrained vertices' Phong normals read, with their faces (CSR, in
-  // face order, so the sums match VertexNormals bit for bit).
-  std::vector<int> normal_vertices_, normal_offsets_, normal_faces_, normal_face_list_;
   Report report_;
   // Per-frame buffers.
-  Positions vertex_normals_;  // #Vb by 3, only the rows of normal_vertices_ are kept up to date
-  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> face_normals_;  // rows of normal_face_list_
-  Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> frame_;  // V' per base face (row-major 3×3)
+  Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> frame_;  // V' per frame slot (row-major 3×3)
   Eigen::MatrixXd rhs_, known_values_, solution_;  // reduced system: rows of system_.unknown()
 };
 

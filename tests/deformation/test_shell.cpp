@@ -35,6 +35,16 @@ Scene small_scene(const std::string& name, double bump_height = 0.05) {
   return make_scene(name, o);
 }
 
+// The scene's region with a second handle: a disc in the middle of the free region.
+Region with_disc_handle(const Scene& s) {
+  Region region = s.region;
+  std::vector<int> disc;
+  for (int v : s.region.free_vertices())
+    if ((Vec3(s.P.row(v)) - Vec3(0.5, 0.5, 0)).head<2>().norm() < 0.08) disc.push_back(v);
+  region.set_handle(disc, 1);
+  return region;
+}
+
 // Angle between the normals of the two faces of each interior edge, after minus before.
 std::vector<std::pair<Vec3, double>> dihedral_change(const Mesh& mesh, const Positions& before, const Positions& after) {
   auto normal = [&](const Positions& P, Mesh::FaceHandle f) {
@@ -126,12 +136,7 @@ TEST_CASE("shell: translations move everything rigidly, rigid motions do on a fl
 
 TEST_CASE("shell: the basis path agrees with a direct solve for random affine handles", "[deformation][shell]") {
   const Scene s = small_scene("lift");
-  Region region = s.region;
-  // A second handle: a disc in the middle of the free region.
-  std::vector<int> disc;
-  for (int v : s.region.free_vertices())
-    if ((Vec3(s.P.row(v)) - Vec3(0.5, 0.5, 0)).head<2>().norm() < 0.08) disc.push_back(v);
-  region.set_handle(disc, 1);
+  const Region region = with_disc_handle(s);
   std::mt19937 rng(11);
   for (ShellOptions o : {ShellOptions{1, 0}, ShellOptions{0, 1}, ShellOptions{1, 10}}) {
     ShellDeformer shell(o);
@@ -152,11 +157,7 @@ TEST_CASE(
   // deform() leaves out the basis columns whose weight is zero; the result must equal p + Σ_k B_k [A_k − I |
   // t_k]ᵀ with every term, value for value, whichever weights are zero.
   const Scene s = small_scene("lift");
-  Region region = s.region;
-  std::vector<int> disc;
-  for (int v : s.region.free_vertices())
-    if ((Vec3(s.P.row(v)) - Vec3(0.5, 0.5, 0)).head<2>().norm() < 0.08) disc.push_back(v);
-  region.set_handle(disc, 1);
+  const Region region = with_disc_handle(s);
   ShellDeformer shell;
   shell.prepare(s.P, s.F, region);
   const Eigen::MatrixXd basis = shell.basis();

@@ -95,8 +95,8 @@ int main(int argc, char** argv) {
       transfer_frames.push_back(1000 * seconds_since(t0));
     }
 
-    const msd::NormalDisplacements& nd_const = transfer.normal_displacements();
-    msd::NormalDisplacements nd = nd_const;  // a copy: reconstruct() is not const
+    msd::NormalDisplacements nd;  // every vertex (transfer's own places only its constrained vertices)
+    nd.encode(scene.P, scene.F, scene.smooth, scene.F);
     std::vector<double> normal_frames;
     for (int f = 0; f < 10; ++f) {
       t0 = Clock::now();

@@ -99,7 +99,10 @@ class DeformationTransfer : public DetailEncoding {
   const Eigen::VectorXi& source_faces() const { return source_face_; }
   //! The vertices held fixed in the solve (anchors, then pinned vertices), in solve order.
   const std::vector<int>& constrained_vertices() const { return system_.known(); }
+  //! The normal displacements of S on B that give the Dirichlet values: they reconstruct only the
+  //! constrained vertices (their placed_vertices() are the others).
   const NormalDisplacements& normal_displacements() const { return normal_; }
+  //! Newton fallbacks among the constrained vertices (the only base points that reach S').
   std::vector<std::string> encode_warnings() const override { return normal_.encode_warnings(); }
 
  private:

@@ -292,6 +292,7 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
   const auto t0 = std::chrono::steady_clock::now();
   const char* where = "DeformationTransfer::reconstruct";
   if (!encoded_) throw UsageError(std::string(where) + ": called before encode()");
+  check_not_aliased(B_deformed, out, where);
   if (B_deformed.rows() != num_base_vertices_)
     throw UsageError(std::string(where) + ": deformed base has " + std::to_string(B_deformed.rows()) +
                      " vertices, the encoded base had " + std::to_string(num_base_vertices_));

@@ -198,6 +198,7 @@ void DisplacementVectors::encode(const Positions& S, const Faces& Fs, const Posi
 
 void DisplacementVectors::reconstruct(const Positions& B_deformed, Positions& out) {
   if (!encoded_) throw UsageError("DisplacementVectors::reconstruct: called before encode()");
+  check_not_aliased(B_deformed, out, "DisplacementVectors::reconstruct");
   const long nv = static_cast<long>(coefficients_.rows());
   if (B_deformed.rows() != nv)
     throw UsageError("DisplacementVectors::reconstruct: deformed base has " +

@@ -365,6 +365,7 @@ void DisplacementVolumes::reconstruct(const Positions& B_deformed, Positions& ou
   const auto t0 = std::chrono::steady_clock::now();
   const char* where = "DisplacementVolumes::reconstruct";
   if (!encoded_) throw UsageError(std::string(where) + ": called before encode()");
+  check_not_aliased(B_deformed, out, where);
   if (B_deformed.rows() != base_.rows())
     throw UsageError(std::string(where) + ": deformed base has " + std::to_string(B_deformed.rows()) +
                      " vertices, the encoded base had " + std::to_string(base_.rows()));

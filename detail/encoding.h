@@ -47,10 +47,19 @@ class DetailEncoding {
   //! that need S and B to share connectivity throw InvalidInput when they do not.
   virtual void encode(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) = 0;
   //! Writes S' (#Vs by 3) for the deformed base B' (#Vb by 3) into out.
-  //! \throw UsageError before encode() or when B' has the wrong size.
+  //! \throw UsageError before encode(), when B' has the wrong size, or when out is B_deformed itself (S' is
+  //! written while B' is still read).
   virtual void reconstruct(const Positions& B_deformed, Positions& out) = 0;
 
  protected:
+  //! \throw UsageError naming `where` when out is B_deformed itself.
+  static void check_not_aliased(const Positions& B_deformed, const Positions& out, const char* where) {
+    if (&B_deformed == &out)
+      throw UsageError(
+          std::string(where) +
+          ": out is the deformed base itself; S' is written while B' is read, pass another matrix");
+  }
+
   //! placed_vertices() as a mask over the num_vertices vertices of S.
   //! \throw InvalidInput naming `where` on an index out of range.
   std::vector<char> placed_mask(long num_vertices, const char* where) const {

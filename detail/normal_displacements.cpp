@@ -288,6 +288,7 @@ void NormalDisplacements::base_points(const Positions& B, Positions& out) const 
 
 void NormalDisplacements::reconstruct(const Positions& B_deformed, Positions& out) {
   if (!encoded()) throw UsageError("NormalDisplacements::reconstruct: called before encode()");
+  check_not_aliased(B_deformed, out, "NormalDisplacements::reconstruct");
   if (B_deformed.rows() != num_base_vertices_)
     throw UsageError("NormalDisplacements::reconstruct: deformed base has " +
                      std::to_string(B_deformed.rows()) + " vertices, the encoded base had " +

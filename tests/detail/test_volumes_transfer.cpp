@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "msdeform/core/errors.h"
@@ -10,6 +12,7 @@
 #include "msdeform/core/subdivision.h"
 #include "msdeform/detail/deformation_transfer.h"
 #include "msdeform/detail/displacement_volumes.h"
+#include "msdeform/detail/encodings.h"
 #include "msdeform/detail/normal_displacements.h"
 #include "test_util.h"
 
@@ -452,6 +455,27 @@ TEST_CASE("volumes and transfer: bad use and bad input", "[detail][volumes][tran
   CHECK_THROWS_WITH(dt.reconstruct(nan_b, out), Contains("vertex 2"));
   dt.reconstruct(B, out);
   CHECK(test::max_row_distance(out, S) <= 1e-9);
+}
+
+TEST_CASE("every encoding refuses to write S' over the B' it reads", "[detail][bad-input]") {
+  SceneOptions o;
+  o.resolution = 2000;
+  const Scene s = make_surface(SceneShape::Plane, o);
+  for (const std::string& name : encoding_names()) {
+    EncodingOptions options;
+    options.kind = encoding_kind(name);
+    const std::unique_ptr<DetailEncoding> e = make_encoding(options);
+    e->set_anchor_vertices(s.region.constrained_vertices());
+    e->encode(s.P, s.F, s.smooth, s.F);
+    Positions B = bend120()(s.smooth);
+    const Positions before = B;
+    INFO(name);
+    CHECK_THROWS_WITH(e->reconstruct(B, B), Contains("out is the deformed base itself"));
+    CHECK((B.array() == before.array()).all());  // untouched
+    Positions out;
+    e->reconstruct(B, out);
+    CHECK(out.rows() == s.P.rows());
+  }
 }
 
 TEST_CASE("volumes and transfer: reconstruct reuses out", "[detail][volumes][transfer]") {

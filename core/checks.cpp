@@ -8,23 +8,28 @@
 
 namespace msd {
 
+bool all_finite(const double* x, long n) {
+  // x − x is 0 for a finite x and NaN otherwise. Four independent sums keep the loop branch-free and off
+  // the adder's latency chain (2.2 ms → 1.1 ms per 3M doubles on one core).
+  double sum[4] = {0, 0, 0, 0};
+  long i = 0;
+  for (; i + 4 <= n; i += 4)
+    for (int k = 0; k < 4; ++k) sum[k] += x[i + k] - x[i + k];
+  for (; i < n; ++i) sum[0] += x[i] - x[i];
+  return sum[0] + sum[1] + sum[2] + sum[3] == 0;  // false for a NaN sum
+}
+
 long first_non_finite_row(const Positions& X) {
   const long n = static_cast<long>(X.rows());
   const double* x = X.data();
   std::atomic<bool> finite{true};
-  parallel_for_chunks(n, [&](long begin, long end) {
-    // x − x is 0 for a finite x and NaN otherwise. Four independent sums keep the loop branch-free and
-    // off the adder's latency chain (2.2 ms → 1.1 ms per 3M doubles on one core).
-    double sum[4] = {0, 0, 0, 0};
-    for (int c = 0; c < 3; ++c) {
-      const double* col = x + c * n;
-      long i = begin;
-      for (; i + 4 <= end; i += 4)
-        for (int k = 0; k < 4; ++k) sum[k] += col[i + k] - col[i + k];
-      for (; i < end; ++i) sum[0] += col[i] - col[i];
-    }
-    if (sum[0] + sum[1] + sum[2] + sum[3] != 0) finite = false;  // also true for a NaN sum
-  }, 1 << 16);
+  parallel_for_chunks(
+      n,
+      [&](long begin, long end) {
+        for (int c = 0; c < 3; ++c)
+          if (!all_finite(x + c * n + begin, end - begin)) finite = false;
+      },
+      1 << 16);
   if (finite) return -1;
   for (long v = 0; v < n; ++v)
     if (!X.row(v).allFinite()) return v;

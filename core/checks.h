@@ -6,6 +6,9 @@
 
 namespace msd {
 
+//! Whether the n doubles at x are all finite (no NaN or infinity); one thread, branch-free. For a pass that
+//! checks what it has just written while it is still in the cache.
+bool all_finite(const double* x, long n);
 //! The first row of X (#V by 3) with a NaN or infinite coordinate, or -1 when all are finite. One pass
 //! over the three columns on both cores (a frame's output check: 1M rows in about 1 ms).
 long first_non_finite_row(const Positions& X);

@@ -129,7 +129,8 @@ class Deformer {
   //! Method-specific precomputation; arrays and region are already checked, the region has >= 1 handle.
   virtual void do_prepare(const Positions& P, const Faces& F, const Region& region) = 0;
   //! Method-specific frame; transforms are checked, out has #V rows, frame_report_ is reset to its
-  //! defaults. deform() checks afterwards that every position is finite.
+  //! defaults. deform() checks afterwards that every position is finite (unless the frame did, see
+  //! set_output_checked_finite()).
   virtual void do_deform(const std::vector<Mat4>& transforms, Positions& out) = 0;
   //! Methods with traits().vertex_targets: targets checked (#C by 3, finite), out has #V rows.
   virtual void do_deform_to(const Positions& targets, Positions& out);
@@ -151,10 +152,16 @@ class Deformer {
   //! clears the report / checks every position is finite and turns a non-convergence into a warning.
   void begin_frame(Positions& out);
   void end_frame(const Positions& out);
+  //! For do_deform() and do_deform_to(): the frame's own passes checked every row of out finite while it
+  //! was in the cache (or threw), so end_frame() need not read all of out again (at 1M vertices that scan
+  //! costs 1–2 ms once out has left the caches). Call only when every row was checked or copied from data
+  //! checked finite before; end_frame() then still turns a non-convergence into a warning.
+  void set_output_checked_finite() { output_checked_finite_ = true; }
 
  private:
   std::function<void(const std::string&)> progress_;
   bool prepared_ = false;
+  bool output_checked_finite_ = false;  // set_output_checked_finite() in this frame
   int num_handles_ = 0, num_vertices_ = 0, num_constrained_ = 0;
 };
 

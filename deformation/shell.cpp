@@ -1,9 +1,11 @@
 #include "msdeform/deformation/shell.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <utility>
 
+#include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/parallel.h"
@@ -77,10 +79,14 @@ void ShellDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
   // output), further handles add theirs. A chunk's columns stay in L2 across the coordinates. A column
   // whose weight is zero is not read: a translation reads one column of four, and a coordinate no handle
   // moves is the rest position (the terms left out are ±0, so every sum is the same value).
+  // Each computed coordinate of a chunk is checked finite while it is in L2 (a copied one is the rest
+  // position, checked by prepare()), so end_frame() does not read B' again.
+  std::atomic<bool> finite{true};
   parallel_for_chunks(n, [&](long begin, long end) {
     for (int d = 0; d < 3; ++d) {
       double* od = o + d * n;
       const double* rest = f + d * n;
+      bool computed = false;
       for (int k = 0; k < nh; ++k) {
         const double* w = m + d * mrows + 4 * k;
         const double* c[4];
@@ -91,6 +97,7 @@ void ShellDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
             c[nc] = f + (3 + 4 * k + j) * n;
             cw[nc++] = w[j];
           }
+        computed = computed || nc > 0;
         const double* base = k == 0 ? rest : od;
         switch (nc) {
           case 0:
@@ -111,8 +118,10 @@ void ShellDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& ou
               od[i] = base[i] + c[0][i] * cw[0] + c[1][i] * cw[1] + c[2][i] * cw[2] + c[3][i] * cw[3];
         }
       }
+      if (computed && !all_finite(od + begin, end - begin)) finite = false;
     }
   }, 1 << 14);
+  if (finite) set_output_checked_finite();  // else end_frame() names the first non-finite vertex
 }
 
 void ShellDeformer::do_deform_to(const Positions& targets, Positions& out) {

@@ -1,6 +1,7 @@
 #include "msdeform/detail/deformation_transfer.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -9,6 +10,7 @@
 #include <numeric>
 #include <string>
 
+#include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/parallel.h"
@@ -32,20 +34,32 @@ struct Box {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
-  // Grown by the rows of P shifted by `shift`, in one pass on both cores.
-  void add(const Positions& P, const Eigen::RowVector3d& shift = Eigen::RowVector3d::Zero()) {
+  // Grown by the rows of P shifted by `shift`, in one pass on both cores. Returns whether every coordinate
+  // of P is finite (checked in the same pass; the box is meaningless otherwise).
+  bool add(const Positions& P, const Eigen::RowVector3d& shift = Eigen::RowVector3d::Zero()) {
     std::mutex mutex;
+    std::atomic<bool> finite{true};
+    const long n = static_cast<long>(P.rows());
     parallel_for_chunks(
-        static_cast<long>(P.rows()),
+        n,
         [&](long begin, long end) {
           Box chunk;
           for (long i = begin; i < end; ++i) chunk.add(Vec3((P.row(i) + shift).transpose()));
+          for (int c = 0; c < 3; ++c)
+            if (!all_finite(P.data() + c * n + begin, end - begin)) finite = false;
           std::lock_guard<std::mutex> lock(mutex);
           add(chunk.lo);
           add(chunk.hi);
         },
         1 << 16);
+    return finite;
   }
+  // Whether p is within √limit2 of the box: a squared distance with no root (false for a non-finite p).
+  bool near(const Vec3& p, double limit2) const {
+    return (p - p.cwiseMax(lo).cwiseMin(hi)).squaredNorm() < limit2;
+  }
+  // check_result()'s bound on the distance of S' from the box of B' and the Dirichlet values.
+  double result_limit(double rest_extent) const { return kResultBound * (diagonal() + rest_extent); }
   // Norms that do not overflow for coordinates near DBL_MAX (a finite B' can have them).
   double diagonal() const { return (hi - lo).stableNorm(); }
   double distance(const Vec3& p) const {
@@ -296,7 +310,9 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
   if (B_deformed.rows() != num_base_vertices_)
     throw UsageError(std::string(where) + ": deformed base has " + std::to_string(B_deformed.rows()) +
                      " vertices, the encoded base had " + std::to_string(num_base_vertices_));
-  check_finite(B_deformed, where, "the deformed base");
+  Box box;  // of B' (checked finite in the same pass), then grown by the Dirichlet values: the result bound
+  if (!box.add(B_deformed))
+    check_finite(B_deformed, where, "the deformed base");  // throws, naming the vertex
 
   // The frames V' of the base faces the unknown vertices' triangles read (G = V' V⁻¹, with V⁻¹ already
   // folded into the corners' u).
@@ -351,10 +367,22 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
     rhs_.noalias() -= system_.coupling() * known_values_;
     system_.solver().solve(rhs_, solution_);
   }
+  // S' of the unknown vertices, each row tested against check_result()'s bound as it is written (the
+  // Dirichlet rows are finite, and in the box by construction): only when one fails (beyond the bound or
+  // not finite) does check_result() read all of S' to measure it and name the worst vertex.
+  box.add(known_values_, centre);
+  const double limit = box.result_limit(rest_extent_), limit2 = limit * limit;
+  std::atomic<bool> near{true};
   parallel_for_chunks(static_cast<long>(unknown.size()), [&](long begin, long end) {
-    for (long r = begin; r < end; ++r) out.row(unknown[r]) = solution_.row(r) + centre;
+    bool chunk_near = true;
+    for (long r = begin; r < end; ++r) {
+      const Vec3 p = (solution_.row(r) + centre).transpose();
+      out.row(unknown[r]) = p;
+      chunk_near &= box.near(p, limit2);
+    }
+    if (!chunk_near) near = false;
   });
-  check_result(B_deformed, centre, out);
+  if (!near) check_result(B_deformed, centre, out);
   report_.seconds = seconds_since(t0);
 }
 
@@ -363,7 +391,7 @@ void DeformationTransfer::check_result(const Positions& B_deformed, const Eigen:
   Box box;
   box.add(B_deformed);
   box.add(known_values_, centre);  // the Dirichlet values (to rounding: out holds them unshifted)
-  const double limit = kResultBound * (box.diagonal() + rest_extent_);
+  const double limit = box.result_limit(rest_extent_);
   // Within the bound when the squared distance is below the squared bound (no square root per vertex);
   // anything else (beyond it, not finite, or squares out of range) is measured exactly.
   const double limit2 = limit * limit;
@@ -376,7 +404,7 @@ void DeformationTransfer::check_result(const Positions& B_deformed, const Eigen:
     double chunk_distance = 0;
     for (long i = begin; i < end; ++i) {
       const Vec3 p = out.row(i);
-      if ((p - p.cwiseMax(box.lo).cwiseMin(box.hi)).squaredNorm() < limit2) continue;
+      if (box.near(p, limit2)) continue;
       const bool finite = p.allFinite();
       const double d = finite ? box.distance(p) : std::numeric_limits<double>::infinity();
       if ((!finite || d > limit) && (chunk_worst < 0 || d > chunk_distance)) {

@@ -106,7 +106,9 @@ class DeformationTransfer : public DetailEncoding {
   std::vector<std::string> encode_warnings() const override { return normal_.encode_warnings(); }
 
  private:
-  // out: S'; known_values_ + centre: its Dirichlet values (to rounding).
+  // Measures every row of S' (out; known_values_ + centre: its Dirichlet values, to rounding) against the
+  // result bound and throws SolverError naming the worst vertex beyond it or not finite. reconstruct()
+  // calls it only when a row failed the bound's quick test as it was written.
   void check_result(const Positions& B_deformed, const Eigen::RowVector3d& centre,
                     const Positions& out) const;
 

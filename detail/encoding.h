@@ -46,9 +46,11 @@ class DetailEncoding {
   //! S: #Vs by 3 detailed positions with faces Fs; B: #Vb by 3 base positions with faces Fb. Encodings
   //! that need S and B to share connectivity throw InvalidInput when they do not.
   virtual void encode(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) = 0;
-  //! Writes S' (#Vs by 3) for the deformed base B' (#Vb by 3) into out.
+  //! Writes S' (#Vs by 3) for the deformed base B' (#Vb by 3) into out. Every row it writes is finite: a
+  //! row that is not (e.g. from a finite B' whose edges overflow) is an error (MultiscaleDeformer relies
+  //! on it and does not scan S' again).
   //! \throw UsageError before encode(), when B' has the wrong size, or when out is B_deformed itself (S' is
-  //! written while B' is still read).
+  //! written while B' is still read); InvalidInput or SolverError when a row of S' would not be finite.
   virtual void reconstruct(const Positions& B_deformed, Positions& out) = 0;
 
  protected:

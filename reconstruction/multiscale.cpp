@@ -1,6 +1,7 @@
 #include "msdeform/reconstruction/multiscale.h"
 
 #include <algorithm>
+#include <atomic>
 
 #include "msdeform/core/errors.h"
 #include "msdeform/core/extent.h"
@@ -89,13 +90,21 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
     encoding_->reconstruct(base_deformed_, out);  // S' = B' ⊕ D
   // Fixed and handle vertices exactly where the edit puts them (the details reproduce them only to the
   // encoding's accuracy); a whole-body handle holds a large share of the vertices, so on both cores.
+  // The placed rows are checked finite here, the others by the encoding (it throws on a non-finite row
+  // it writes): end_frame() need not read S' again.
+  std::atomic<bool> placed_finite{true};
   parallel_for_chunks(static_cast<long>(placed_.size()), [&](long begin, long end) {
+    double check = 0;  // x − x is 0 for a finite x, NaN otherwise
     for (long i = begin; i < end; ++i) {
       const auto [v, k] = placed_[i];
       const Vec3 p = rest_.row(v);
-      out.row(v) = k < 0 ? p : transform_point(transforms[k], p);
+      const Vec3 q = k < 0 ? p : transform_point(transforms[k], p);
+      out.row(v) = q;
+      check += (q.x() - q.x()) + (q.y() - q.y()) + (q.z() - q.z());
     }
+    if (!(check == 0)) placed_finite = false;
   });
+  if (placed_finite && !d.base_is_input) set_output_checked_finite();
   FrameReport& r = frame_report_;
   const FrameReport& base = base_deformer_->frame_report();
   r.iterations = base.iterations;

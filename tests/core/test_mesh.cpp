@@ -6,6 +6,7 @@
 #include <map>
 #include <random>
 #include <utility>
+#include <vector>
 
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/checks.h"
@@ -90,6 +91,27 @@ TEST_CASE("VertexNormals equals the sum of area-weighted face normals", "[core][
   Positions again = Positions::Constant(P.rows(), 3, 7.0);
   some.compute(P, again);  // a refused list leaves the subset as it was
   CHECK((again - part).cwiseAbs().maxCoeff() == 0.0);
+}
+
+TEST_CASE("all_finite finds a NaN or infinity at any position, the four-wide body and the tail",
+          "[core][checks]") {
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> x(11, -0.0);
+  x[3] = std::numeric_limits<double>::max();
+  x[4] = -std::numeric_limits<double>::max();
+  x[5] = std::numeric_limits<double>::denorm_min();
+  CHECK(all_finite(x.data(), 0));
+  for (long n = 1; n <= 11; ++n) {
+    CHECK(all_finite(x.data(), n));
+    for (long i = 0; i < n; ++i)
+      for (const double bad : {nan, inf, -inf}) {
+        std::vector<double> y = x;
+        y[i] = bad;
+        INFO("n " << n << ", bad at " << i);
+        CHECK_FALSE(all_finite(y.data(), n));
+        CHECK(all_finite(y.data() + i + 1, n - i - 1));  // the rest alone is finite
+      }
+  }
 }
 
 TEST_CASE("first_non_finite_row finds the first NaN or infinity in any column, across parallel chunks",

@@ -478,6 +478,41 @@ TEST_CASE("every encoding refuses to write S' over the B' it reads", "[detail][b
   }
 }
 
+TEST_CASE("every encoding throws rather than return a non-finite row of S' from a finite B'",
+          "[detail][bad-input]") {
+  // The multi-scale deformer relies on it (DetailEncoding::reconstruct) and does not scan S' again. Two
+  // neighbouring base vertices near ±DBL_MAX: their edge overflows, and so would normals, frames and
+  // gradients. Whatever an encoding does with them, it returns finite rows or throws.
+  SceneOptions o;
+  o.resolution = 2000;
+  const Scene s = make_surface(SceneShape::Plane, o);
+  Positions far = s.smooth;
+  const int a = s.F(7, 0), b = s.F(7, 1);
+  far(a, 0) = 1.7e308;
+  far(b, 0) = -1.7e308;
+  for (const std::string& name : encoding_names()) {
+    for (const bool with_placed : {false, true}) {
+      INFO(name << (with_placed ? ", fixed and handle vertices placed by the caller" : ""));
+      EncodingOptions options;
+      options.kind = encoding_kind(name);
+      const std::unique_ptr<DetailEncoding> e = make_encoding(options);
+      e->set_anchor_vertices(s.region.constrained_vertices());
+      if (with_placed) e->set_placed_vertices(s.region.constrained_vertices());
+      e->encode(s.P, s.F, s.smooth, s.F);
+      Positions out = Positions::Zero(s.P.rows(), 3);  // placed rows stay 0 (finite)
+      bool threw = false;
+      try {
+        e->reconstruct(far, out);
+      } catch (const Error& error) {
+        threw = true;
+        INFO(error.what());
+        CHECK_THAT(error.what(), Contains("finite"));
+      }
+      if (!threw) CHECK(out.allFinite());
+    }
+  }
+}
+
 TEST_CASE("volumes and transfer: reconstruct reuses out", "[detail][volumes][transfer]") {
   SceneOptions o;
   o.resolution = 2000;

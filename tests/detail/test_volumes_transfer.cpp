@@ -49,6 +49,18 @@ void coarser_flat_base(const Scene& s, Positions& B, Faces& Fb) {
   Fb = r.faces;
 }
 
+// The named encoding (encoding_names()) of S over its smooth base for scene s, anchored at the region's
+// constrained vertices, and told that the caller places them when `placed`.
+std::unique_ptr<DetailEncoding> encoded(const std::string& name, const Scene& s, bool placed = false) {
+  EncodingOptions options;
+  options.kind = encoding_kind(name);
+  std::unique_ptr<DetailEncoding> e = make_encoding(options);
+  e->set_anchor_vertices(s.region.constrained_vertices());
+  if (placed) e->set_placed_vertices(s.region.constrained_vertices());
+  e->encode(s.P, s.F, s.smooth, s.F);
+  return e;
+}
+
 }  // namespace
 
 TEST_CASE("prism_volume: closed form of the blended prism", "[detail][volumes]") {
@@ -462,11 +474,7 @@ TEST_CASE("every encoding refuses to write S' over the B' it reads", "[detail][b
   o.resolution = 2000;
   const Scene s = make_surface(SceneShape::Plane, o);
   for (const std::string& name : encoding_names()) {
-    EncodingOptions options;
-    options.kind = encoding_kind(name);
-    const std::unique_ptr<DetailEncoding> e = make_encoding(options);
-    e->set_anchor_vertices(s.region.constrained_vertices());
-    e->encode(s.P, s.F, s.smooth, s.F);
+    const std::unique_ptr<DetailEncoding> e = encoded(name, s);
     Positions B = bend120()(s.smooth);
     const Positions before = B;
     INFO(name);
@@ -493,12 +501,7 @@ TEST_CASE("every encoding throws rather than return a non-finite row of S' from 
   for (const std::string& name : encoding_names()) {
     for (const bool with_placed : {false, true}) {
       INFO(name << (with_placed ? ", fixed and handle vertices placed by the caller" : ""));
-      EncodingOptions options;
-      options.kind = encoding_kind(name);
-      const std::unique_ptr<DetailEncoding> e = make_encoding(options);
-      e->set_anchor_vertices(s.region.constrained_vertices());
-      if (with_placed) e->set_placed_vertices(s.region.constrained_vertices());
-      e->encode(s.P, s.F, s.smooth, s.F);
+      const std::unique_ptr<DetailEncoding> e = encoded(name, s, with_placed);
       Positions out = Positions::Zero(s.P.rows(), 3);  // placed rows stay 0 (finite)
       bool threw = false;
       try {

@@ -383,6 +383,7 @@ void add_compare_command(CLI::App& app) {
       std::fprintf(stderr, "  [%d/%d, %.0f s, about %.0f s left] %s\n", *done, *total, elapsed, left, line.c_str());
     };
     check_method_names(options.methods);  // fail fast, before any work
+    a->method.check_used_by(options.methods);  // an option none of them reads would be ignored
     const RegionOptions& r = a->mesh.region;
     if (a->mesh.mesh.empty() && (r.builds_region() || r.builds_transforms() || !a->mesh.sel.empty() ||
                                  !a->mesh.def.empty() || !r.write_sel.empty() || !r.write_def.empty()))

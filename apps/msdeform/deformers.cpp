@@ -230,24 +230,38 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
       ->capture_default_str();
 }
 
-std::string DeformerOptions::method_name() const {
-  const bool multiscale = method.rfind("multiscale", 0) == 0;
+void DeformerOptions::check_used_by(const std::vector<std::string>& methods) const {
+  const auto is_multiscale = [](const std::string& m) { return m.rfind("multiscale", 0) == 0; };
+  const bool multiscale = std::any_of(methods.begin(), methods.end(), is_multiscale);
+  const bool one = methods.size() == 1;
   if (!multiscale && (decomposition.given() || (base_method_option && base_method_option->count() > 0)))
-    throw InvalidInput("--base, --detail-scale, --fairing, --remesh-base and --base-method apply to --method "
-                       "multiscale; --method " + method + " has no base to decompose");
-  const std::string full = method == "multiscale" ? "multiscale-" + encoding : method;
-  const auto uses = [&](const std::string& m) { return full == m || (multiscale && settings.base_method == m); };
+    throw InvalidInput(
+        "--base, --detail-scale, --fairing, --remesh-base and --base-method apply to --method "
+        "multiscale; " +
+        (one ? "--method " + methods[0] + " has no"
+             : "none of --methods " + joined(methods, ", ") + " has a") +
+        " base to decompose");
+  const auto used = [&](const std::string& m) {
+    return std::find(methods.begin(), methods.end(), m) != methods.end() ||
+           (multiscale && settings.base_method == m);
+  };
   for (const Scoped& scoped : scoped_options) {
-    if (scoped.option->count() == 0 ||
-        std::any_of(scoped.methods.begin(), scoped.methods.end(), uses))
+    if (scoped.option->count() == 0 || std::any_of(scoped.methods.begin(), scoped.methods.end(), used))
       continue;
     throw InvalidInput(scoped.option->get_name() + " applies to --method " + joined(scoped.methods, ", ") +
-                       " (or multiscale with such a --base-method), not --method " + full);
+                       " (or multiscale with such a --base-method), not " +
+                       (one ? "--method " + methods[0] : "to any of --methods " + joined(methods, ", ")));
   }
+}
+
+std::string DeformerOptions::method_name() const {
+  const std::string full = method == "multiscale" ? "multiscale-" + encoding : method;
+  check_used_by({full});
   if (method == "multiscale") return full;
   if (encoding_option && encoding_option->count() > 0)
-    throw InvalidInput("--encoding " + encoding + " applies to --method multiscale; --method " + method +
-                       (multiscale ? " names its encoding itself" : " has no detail encoding"));
+    throw InvalidInput(
+        "--encoding " + encoding + " applies to --method multiscale; --method " + method +
+        (method.rfind("multiscale", 0) == 0 ? " names its encoding itself" : " has no detail encoding"));
   return method;
 }
 

@@ -61,6 +61,12 @@ expect_error 2 "--encoding: foo not in {vectors,normal,volumes,transfer}" \
 grep -qF "frame: 3 iterations" out.txt || { cat out.txt; fail "--iterations 3 did not limit the volumes' sweeps"; }
 expect_error 1 "--tolerance applies to --method arap, primo (or multiscale with such a --base-method), not --method multiscale-volumes" \
   "$msdeform" deform --scene lift --method multiscale --encoding volumes --tolerance 0.1 -o x.off
+# compare refuses an option that none of its methods reads (it would be ignored), before any work.
+expect_error 1 "--iterations applies to --method arap, primo, multiscale-volumes (or multiscale with such a --base-method), not to any of --methods shell, propagate" \
+  "$msdeform" compare --scenes lift --methods shell,propagate --iterations 5 -o cmp-unread
+expect_error 1 "none of --methods shell, arap has a base to decompose" \
+  "$msdeform" compare --scenes lift --methods shell,arap --detail-scale 0.3 -o cmp-unread
+grep -q "building scene" err.txt && fail "compare built scenes before refusing an unread option"
 # Without a detail layer there is nothing to iterate: no "0 iterations, relative residual -1".
 "$msdeform" deform --scene lift --resolution 16 --method multiscale --encoding volumes -o v.off >out.txt 2>&1 ||
   fail "multiscale volumes at 16 vertices"

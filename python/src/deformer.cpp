@@ -840,9 +840,10 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
             py::dict d;
             for (const Option& o : options_table())
               if (const std::string* g = matching_group(o, self.groups)) d[py::str(o.name)] = o.get(self.settings, *g);
-            return d;
+            return py::module_::import("types").attr("MappingProxyType")(d);
           },
-          "the values of every option this method reads (a dict; defaults where none was given)")
+          "the values of every option this method reads (a read-only mapping; defaults where none was "
+          "given); options are set by Deformer(name, **options): an assignment here raises TypeError")
       .def_property_readonly(
           "base",
           [](py::handle obj) -> py::object {

@@ -130,6 +130,9 @@ def test_options_configure_the_method(lift):
     assert msdeform.Deformer("multiscale-normal", base_method="shell").options["kb"] == 1.0
     assert msdeform.Deformer("lattice", cells=(4, 3, 2)).options["cells"] == (4, 3, 2)
     assert msdeform.Deformer("lattice", cells=5, seed_least_norm=True).options["seed_least_norm"] is True
+    with pytest.raises(TypeError):  # a read-only view: an assignment would not reach the method
+        arap.options["iterations"] = 3
+    assert arap.options["iterations"] == 7
 
 
 def test_a_python_transfer_function(lift):

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -247,6 +248,7 @@ SparseMatrix weighted_square(const SparseMatrix& W, const Eigen::VectorXd& w) {
   };
   tbb::enumerable_thread_specific<Workspace> workspaces(
       [n] { return Workspace{std::vector<double>(n), std::vector<long>(n, -1), {}}; });
+  check_neighbour_coupling(W, 1, "the bi-Laplacian W M^-1 W");  // a vertex alone too many: before the count
   std::vector<int> start(static_cast<size_t>(n) + 1, 0);
   parallel_for_chunks(n, [&](long begin, long end) {
     Workspace& ws = workspaces.local();
@@ -255,6 +257,13 @@ SparseMatrix weighted_square(const SparseMatrix& W, const Eigen::VectorXd& w) {
         for (SparseMatrix::InnerIterator it(W, kt.row()); it; ++it)
           if (ws.seen[it.row()] != j) ws.seen[it.row()] = j, ++start[j + 1];
   }, 1024);
+  long long entries = 0;
+  for (long j = 0; j < n; ++j) entries += start[j + 1];
+  if (entries > std::numeric_limits<int>::max())
+    throw InvalidInput(
+        "the bi-Laplacian W M^-1 W would have " + std::to_string(entries) +
+        " nonzeros, more than a sparse matrix holds (2^31 - 1): it couples every two neighbours "
+        "of a vertex; remesh so that no vertex has thousands of neighbours");
   SparseMatrix Q = compressed_columns(n, start);
   int* index = Q.innerIndexPtr();
   double* value = Q.valuePtr();
@@ -280,6 +289,20 @@ SparseMatrix weighted_square(const SparseMatrix& W, const Eigen::VectorXd& w) {
     }
   }, 1024);
   return Q;
+}
+
+void check_neighbour_coupling(const SparseMatrix& W, int unknowns_per_vertex, const std::string& product) {
+  Eigen::Index widest = 0;
+  for (Eigen::Index j = 1; j < W.outerSize(); ++j)
+    if (W.col(j).nonZeros() > W.col(widest).nonZeros()) widest = j;
+  const long long block =
+      W.outerSize() > 0 ? unknowns_per_vertex * static_cast<long long>(W.col(widest).nonZeros()) : 0;
+  if (block * block > std::numeric_limits<int>::max())
+    throw InvalidInput(product +
+                       " would have more than 2^31 - 1 nonzeros (the most a sparse matrix holds): it "
+                       "couples every two neighbours of a vertex, and vertex " +
+                       std::to_string(widest) + " has " + std::to_string(W.col(widest).nonZeros() - 1) +
+                       "; remesh so that no vertex has thousands of neighbours");
 }
 
 SparseMatrix polyharmonic_matrix(const LaplaceOperator& op, int k) {

@@ -55,6 +55,7 @@ void LaplacianEditing::check_scale(const Positions& out) {
 void LaplacianEditing::prepare_implicit(const Positions& P, const Faces& F, const Region&) {
   const int nv = static_cast<int>(P.rows());
   const LaplaceOperator lap = cotan_laplacian(P, F);
+  check_neighbour_coupling(lap.W, 3, "laplacian: the least-squares system R^T R (x, y and z coupled)");
   delta_ = rest_laplace_coordinates(lap, P);
   const VertexAdjacency rings = vertex_adjacency(F, nv);
   // Residual operator R (3#V by 3#V, variable 3v + d): row block i is

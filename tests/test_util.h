@@ -126,6 +126,18 @@ inline void icosphere(int levels, Positions& P, Faces& F) {
   for (size_t i = 0; i < f.size(); ++i) F.row(i) = f[i];
 }
 
+//! The unit disk (z = 0) triangulated as one fan: vertex 0 at the centre, k around it (1..k), k faces.
+inline void fan_disk(int k, Positions& P, Faces& F) {
+  P.resize(k + 1, 3);
+  F.resize(k, 3);
+  P.row(0).setZero();
+  for (int i = 0; i < k; ++i) {
+    const double a = 2 * M_PI * i / k;
+    P.row(i + 1) << std::cos(a), std::sin(a), 0;
+    F.row(i) << 0, i + 1, (i + 1) % k + 1;
+  }
+}
+
 //! Regular n x n grid on [0,1]^2 (z = 0) with interior vertices jittered in the plane by up to
 //! jitter * spacing; returns interior flags via `interior`.
 inline void jittered_grid(int n, double jitter, Positions& P, Faces& F, std::vector<bool>& interior, unsigned seed = 7) {

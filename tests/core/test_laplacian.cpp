@@ -144,6 +144,18 @@ TEST_CASE("cotan Laplacian: negative semi-definite for any triangle, needles inc
   }
 }
 
+TEST_CASE("weighted_square refuses a product beyond a sparse matrix's int index, naming the vertex",
+          "[core][laplacian]") {
+  // A disk triangulated as one fan: the centre's 47000 neighbours are all coupled in W M⁻¹ W, 47001² > 2^31 −
+  // 1 entries (it crashed in the column starts' int sums before, with the shell on such a cone).
+  Positions P;
+  Faces F;
+  test::fan_disk(47000, P, F);
+  const LaplaceOperator lap = cotan_laplacian(P, F);
+  CHECK_THROWS_WITH(weighted_square(lap.W, lap.mass.cwiseInverse()),
+                    Catch::Contains("more than 2^31 - 1 nonzeros") && Catch::Contains("vertex 0 has 47000"));
+}
+
 TEST_CASE("weighted_square is Eigen's W diag(w) W bit for bit, submatrix is the dense extraction", "[core][laplacian]") {
   SceneOptions options;
   options.resolution = 20000;  // over the parallel grain: both cores take part

@@ -1,10 +1,13 @@
 #include <catch2/catch.hpp>
 
+#include <numeric>
+
+#include "deformation/edit_measures.h"
 #include "msdeform/analysis/metrics.h"
 #include "msdeform/core/scenes.h"
-#include "deformation/edit_measures.h"
 #include "msdeform/deformation/laplacian_editing.h"
 #include "msdeform/deformation/shell.h"
+#include "test_util.h"
 
 using namespace msd;
 
@@ -118,4 +121,20 @@ TEST_CASE("laplacian: a frame that scales the free region says so in its report"
       CHECK_THAT(warnings[0], Catch::Matchers::Contains("linearised rotations"));
     }
   }
+}
+
+TEST_CASE("laplacian: a vertex of 15500 neighbours is refused by name, not an out-of-memory",
+          "[deformation][laplacian]") {
+  // R^T R couples x, y and z of every two neighbours of a vertex: (3 · 15501)² > 2^31 − 1 entries.
+  Positions P;
+  Faces F;
+  test::fan_disk(15500, P, F);
+  Region region(static_cast<int>(P.rows()));
+  std::vector<int> rim(100);
+  std::iota(rim.begin(), rim.end(), 1);
+  region.set_fixed(rim);
+  region.set_handle({0}, 0);
+  LaplacianEditing laplacian;
+  CHECK_THROWS_WITH(laplacian.prepare(P, F, region), Catch::Contains("laplacian: the least-squares system") &&
+                                                         Catch::Contains("vertex 0 has 15500"));
 }

@@ -146,8 +146,8 @@ TEST_CASE("cotan Laplacian: negative semi-definite for any triangle, needles inc
 
 TEST_CASE("weighted_square refuses a product beyond a sparse matrix's int index, naming the vertex",
           "[core][laplacian]") {
-  // A disk triangulated as one fan: the centre's 47000 neighbours are all coupled in W M⁻¹ W, 47001² > 2^31 −
-  // 1 entries (it crashed in the column starts' int sums before, with the shell on such a cone).
+  // A disk triangulated as one fan: W M⁻¹ W couples every two of the centre's 47000 neighbours, more than
+  // 2^31 − 1 entries (the column starts' int sums overflowed before: the shell crashed on such a cone).
   Positions P;
   Faces F;
   test::fan_disk(47000, P, F);

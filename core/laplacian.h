@@ -74,7 +74,7 @@ SparseMatrix polyharmonic_matrix(const LaplaceOperator& op, int k);
 //! thin-plate matrix Q₂ = W M⁻¹ W with w = M⁻¹, or the low-pass base's bending term. Its pattern is W's
 //! 2-ring. Computed on both cores, with the values of Eigen's W * (w.asDiagonal() * W) bit for bit.
 //! \throw InvalidInput when it would have more than 2^31 − 1 nonzeros (it couples every two neighbours
-//! of a vertex: a vertex of valence 46341 or more alone does that), naming the vertex of most neighbours.
+//! of a vertex: a vertex of valence 46340 or more alone does that), naming the vertex of most neighbours.
 SparseMatrix weighted_square(const SparseMatrix& W, const Eigen::VectorXd& w);
 
 //! Refuses a product that couples every two neighbours of a vertex (W M⁻¹ W, a least-squares RᵀR over

@@ -2,6 +2,7 @@
 the method list. Everything here is re-exported by the package."""
 
 import collections
+import copy
 import math
 
 import numpy as np
@@ -13,6 +14,31 @@ __all__ = [
     "region", "constrained_vertices", "handle_vertices",
     "Edit", "scene", "load_edit", "MethodInfo", "methods",
 ]
+
+# ---------------------------------------------------------------------------------------------------
+# Deformer.options: the values in use, a dict that refuses changes (they would not reach the method).
+
+
+class Options(dict):
+    """A method's option values, as Deformer.options returns them: a dict (json.dumps, dict(), ==, pickle
+    and copy work as on any dict; copies are plain dicts) whose items cannot be changed. Raises TypeError
+    on an assignment: options are set by Deformer(name, **options)."""
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("Deformer.options is read-only: a change here would not reach the method; set options "
+                        "by Deformer(name, **options), e.g. Deformer('arap', iterations=10)")
+
+    __setitem__ = __delitem__ = __ior__ = clear = pop = popitem = setdefault = update = _refuse
+
+    def __reduce__(self):
+        return (dict, (dict(self),))
+
+    def __copy__(self):
+        return dict(self)
+
+    def __deepcopy__(self, memo):
+        return copy.deepcopy(dict(self), memo)
+
 
 # ---------------------------------------------------------------------------------------------------
 # Transforms: 4x4 float64 numpy arrays acting on column vectors (p' = T @ [p, 1]); compose with @.

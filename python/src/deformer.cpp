@@ -840,10 +840,11 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
             py::dict d;
             for (const Option& o : options_table())
               if (const std::string* g = matching_group(o, self.groups)) d[py::str(o.name)] = o.get(self.settings, *g);
-            return py::module_::import("types").attr("MappingProxyType")(d);
+            return py::module_::import("msdeform._helpers").attr("Options")(d);
           },
-          "the values of every option this method reads (a read-only mapping; defaults where none was "
-          "given); options are set by Deformer(name, **options): an assignment here raises TypeError")
+          "the values of every option this method reads (a dict whose items cannot be changed; defaults "
+          "where none was given): options are set by Deformer(name, **options), an assignment here raises "
+          "TypeError")
       .def_property_readonly(
           "base",
           [](py::handle obj) -> py::object {

@@ -1,6 +1,9 @@
 """The Deformer: every catalogue method on the bumpy plane (handles met, rest pose from identity
 transforms), options, frames, the no-copy output, the GIL, and the errors."""
 
+import copy
+import json
+import pickle
 import threading
 import time
 import warnings
@@ -130,9 +133,14 @@ def test_options_configure_the_method(lift):
     assert msdeform.Deformer("multiscale-normal", base_method="shell").options["kb"] == 1.0
     assert msdeform.Deformer("lattice", cells=(4, 3, 2)).options["cells"] == (4, 3, 2)
     assert msdeform.Deformer("lattice", cells=5, seed_least_norm=True).options["seed_least_norm"] is True
-    with pytest.raises(TypeError):  # a read-only view: an assignment would not reach the method
+    with pytest.raises(TypeError, match="read-only"):  # an assignment would not reach the method
         arap.options["iterations"] = 3
+    with pytest.raises(TypeError, match="read-only"):
+        arap.options.update(iterations=3)
     assert arap.options["iterations"] == 7
+    assert isinstance(arap.options, dict) and json.loads(json.dumps(arap.options)) == arap.options
+    for kept in (copy.copy(arap.options), copy.deepcopy(arap.options), pickle.loads(pickle.dumps(arap.options))):
+        assert type(kept) is dict and kept == arap.options  # plain dicts, free to change
 
 
 def test_a_python_transfer_function(lift):

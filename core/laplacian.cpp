@@ -47,6 +47,24 @@ SparseMatrix compressed_columns(Eigen::Index rows, std::vector<int>& start) {
   return S;
 }
 
+// The vertex (column of W) with the most neighbours.
+Eigen::Index most_neighbours(const SparseMatrix& W) {
+  Eigen::Index widest = 0;
+  for (Eigen::Index j = 1; j < W.outerSize(); ++j)
+    if (W.col(j).nonZeros() > W.col(widest).nonZeros()) widest = j;
+  return widest;
+}
+
+// `product` (which couples every two neighbours of a vertex) has more entries than a sparse matrix holds.
+InvalidInput too_many_entries(const SparseMatrix& W, const std::string& product) {
+  const Eigen::Index widest = most_neighbours(W);
+  return InvalidInput(product +
+                      " would have more than 2^31 - 1 nonzeros (the most a sparse matrix holds): it "
+                      "couples every two neighbours of a vertex, and vertex " +
+                      std::to_string(widest) + " has " + std::to_string(W.col(widest).nonZeros() - 1) +
+                      "; remesh so that no vertex has thousands of neighbours");
+}
+
 }  // namespace
 
 TriangleCotangents triangle_cotangents(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
@@ -259,11 +277,7 @@ SparseMatrix weighted_square(const SparseMatrix& W, const Eigen::VectorXd& w) {
   }, 1024);
   long long entries = 0;
   for (long j = 0; j < n; ++j) entries += start[j + 1];
-  if (entries > std::numeric_limits<int>::max())
-    throw InvalidInput(
-        "the bi-Laplacian W M^-1 W would have " + std::to_string(entries) +
-        " nonzeros, more than a sparse matrix holds (2^31 - 1): it couples every two neighbours "
-        "of a vertex; remesh so that no vertex has thousands of neighbours");
+  if (entries > std::numeric_limits<int>::max()) throw too_many_entries(W, "the bi-Laplacian W M^-1 W");
   SparseMatrix Q = compressed_columns(n, start);
   int* index = Q.innerIndexPtr();
   double* value = Q.valuePtr();
@@ -292,17 +306,10 @@ SparseMatrix weighted_square(const SparseMatrix& W, const Eigen::VectorXd& w) {
 }
 
 void check_neighbour_coupling(const SparseMatrix& W, int unknowns_per_vertex, const std::string& product) {
-  Eigen::Index widest = 0;
-  for (Eigen::Index j = 1; j < W.outerSize(); ++j)
-    if (W.col(j).nonZeros() > W.col(widest).nonZeros()) widest = j;
+  const Eigen::Index widest = most_neighbours(W);
   const long long block =
       W.outerSize() > 0 ? unknowns_per_vertex * static_cast<long long>(W.col(widest).nonZeros()) : 0;
-  if (block * block > std::numeric_limits<int>::max())
-    throw InvalidInput(product +
-                       " would have more than 2^31 - 1 nonzeros (the most a sparse matrix holds): it "
-                       "couples every two neighbours of a vertex, and vertex " +
-                       std::to_string(widest) + " has " + std::to_string(W.col(widest).nonZeros() - 1) +
-                       "; remesh so that no vertex has thousands of neighbours");
+  if (block * block > std::numeric_limits<int>::max()) throw too_many_entries(W, product);
 }
 
 SparseMatrix polyharmonic_matrix(const LaplaceOperator& op, int k) {

@@ -26,19 +26,19 @@ std::string format(const char* fmt, double x) {
 
 }  // namespace
 
-void check_method_names(const std::vector<std::string>& methods) {
+void check_comparison(const ComparisonOptions& options) {
+  const std::vector<std::string>& methods = options.methods;
   if (methods.empty()) throw InvalidInput("no method to compare");
   for (size_t i = 0; i < methods.size(); ++i)
     for (size_t j = 0; j < i; ++j)
       if (methods[i] == methods[j]) throw InvalidInput("method '" + methods[i] + "' is listed twice");
   for (const auto& m : methods) builtin_methods().find(m);  // throws for an unknown name, listing the known ones
+  if (!options.reference.empty() && std::find(methods.begin(), methods.end(), options.reference) == methods.end())
+    throw InvalidInput("the reference method '" + options.reference + "' is not among the compared methods");
 }
 
 std::vector<MethodResult> compare_methods(const EditCase& edit, const ComparisonOptions& options) {
-  check_method_names(options.methods);
-  if (!options.reference.empty() &&
-      std::find(options.methods.begin(), options.methods.end(), options.reference) == options.methods.end())
-    throw InvalidInput("the reference method '" + options.reference + "' is not among the compared methods");
+  check_comparison(options);
   const Positions& rest = edit.P;
   const Faces& F = edit.F;
   // The rest-shape side of the metrics, once for every method. A metric this input cannot give is left

@@ -60,8 +60,9 @@ struct ComparisonOptions {
   std::function<void(const std::string&)> progress;
 };
 
-//! Checks that every method name is known, before any work. \throw InvalidInput naming the first unknown.
-void check_method_names(const std::vector<std::string>& methods);
+//! Checks the options before any work: every method name known and listed once, the reference (when
+//! given) among them. \throw InvalidInput naming the first fault.
+void check_comparison(const ComparisonOptions& options);
 
 //! Runs each method on the case and measures the result. The metrics' rest-shape data (RigidityMetric,
 //! DetailDistortionMetric, VolumeChangeMetric) are prepared once per call, not once per method. A method

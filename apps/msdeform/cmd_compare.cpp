@@ -382,8 +382,6 @@ void add_compare_command(CLI::App& app) {
       const double left = *total > *done ? elapsed / *done * (*total - *done) : 0;
       std::fprintf(stderr, "  [%d/%d, %.0f s, about %.0f s left] %s\n", *done, *total, elapsed, left, line.c_str());
     };
-    check_method_names(options.methods);  // fail fast, before any work
-    a->method.check_used_by(options.methods);  // an option none of them reads would be ignored
     const RegionOptions& r = a->mesh.region;
     if (a->mesh.mesh.empty() && (r.builds_region() || r.builds_transforms() || !a->mesh.sel.empty() ||
                                  !a->mesh.def.empty() || !r.write_sel.empty() || !r.write_def.empty()))
@@ -395,6 +393,8 @@ void add_compare_command(CLI::App& app) {
         if (options.reference.empty() &&
             std::find(options.methods.begin(), options.methods.end(), candidate) != options.methods.end())
           options.reference = candidate;
+    check_comparison(options);  // fail fast, before any scene is built or folder made
+    a->method.check_used_by(options.methods, "--methods");  // an option none of them reads would be ignored
     // Build every case first, so a bad name or file fails before anything is written.
     std::vector<std::string> scenes = a->scenes;
     if (scenes.empty() && a->mesh.mesh.empty() && a->survey.empty()) scenes = default_scenes();

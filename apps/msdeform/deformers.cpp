@@ -98,41 +98,47 @@ void DeformerOptions::add_to(CLI::App& cmd) {
 }
 
 void DeformerOptions::add_settings(CLI::App& cmd) {
+  // Each method's own options are scoped to it: check_used_by() refuses one that no chosen method reads.
+  scoped_options.clear();
   auto* shell = cmd.add_option_group("shell", "shell and multiscale: the thin-shell operator (9.2)");
-  shell->add_option("--ks", settings.shell.ks, "stretching stiffness (membrane)")->capture_default_str();
-  shell->add_option("--kb", settings.shell.kb, "bending stiffness (thin plate)")->capture_default_str();
+  scoped_options.push_back(
+      {shell->add_option("--ks", settings.shell.ks, "stretching stiffness (membrane)")->capture_default_str(), {"shell"}});
+  scoped_options.push_back(
+      {shell->add_option("--kb", settings.shell.kb, "bending stiffness (thin plate)")->capture_default_str(), {"shell"}});
   auto* prop = cmd.add_option_group("propagate", "propagate: transformation propagation (9.1)");
-  prop->add_option("--field", settings.propagation.field, "blend field: euclidean, geodesic or harmonic")
+  const auto propagate = [&](CLI::Option* o) { scoped_options.push_back({o, {"propagate"}}); };
+  propagate(prop->add_option("--field", settings.propagation.field, "blend field: euclidean, geodesic or harmonic")
       ->transform(CLI::CheckedTransformer(
           std::map<std::string, PropagationField>{{"euclidean", PropagationField::Euclidean},
                                                   {"geodesic", PropagationField::Geodesic},
                                                   {"harmonic", PropagationField::Harmonic}},
           CLI::ignore_case))
-      ->default_str("harmonic");
-  prop->add_option("--geodesic-time-factor", settings.propagation.geodesic.time_factor,
+      ->default_str("harmonic"));
+  propagate(prop->add_option("--geodesic-time-factor", settings.propagation.geodesic.time_factor,
                    "field geodesic: heat-method time step t = m h^2 (h the mean edge length)")
       ->check(CLI::Range(1e-6, 1e6))
-      ->capture_default_str();
-  prop->add_option("--blend", settings.propagation.blend,
+      ->capture_default_str());
+  propagate(prop->add_option("--blend", settings.propagation.blend,
                    "matrix (s T(p) + (1-s) p) or decomposed (slerp rotation, scale/shear, translation)")
       ->transform(CLI::CheckedTransformer(
           std::map<std::string, PropagationBlend>{{"matrix", PropagationBlend::Matrix},
                                                   {"decomposed", PropagationBlend::Decomposed}},
           CLI::ignore_case))
-      ->default_str("matrix");
-  prop->add_option("--transfer", settings.propagation.transfer, "transfer function of s: linear or smoothstep")
+      ->default_str("matrix"));
+  propagate(prop->add_option("--transfer", settings.propagation.transfer, "transfer function of s: linear or smoothstep")
       ->transform(CLI::CheckedTransformer(
           std::map<std::string, PropagationTransfer>{{"linear", PropagationTransfer::Linear},
                                                      {"smoothstep", PropagationTransfer::SmoothStep}},
           CLI::ignore_case))
-      ->default_str("linear");
+      ->default_str("linear"));
   auto* laplacian = cmd.add_option_group("laplacian", "laplacian: Laplacian editing (9.4.2)");
-  laplacian->add_flag("--laplacian-explicit{false}", settings.laplacian.implicit,
-                      "explicit variant: δ'_i = M_i δ_i with M_i propagated from the handles (9.4.3) instead of "
-                      "the implicit linearised similarities (9.11)");
+  scoped_options.push_back(
+      {laplacian->add_flag("--laplacian-explicit{false}", settings.laplacian.implicit,
+                           "explicit variant: δ'_i = M_i δ_i with M_i propagated from the handles (9.4.3) instead of "
+                           "the implicit linearised similarities (9.11)"),
+       {"laplacian"}});
   // One pair of options for both iterative methods: bound to DeformerOptions and copied into the chosen
   // method's settings by method_settings() (their defaults differ per method).
-  scoped_options.clear();
   auto* iterative = cmd.add_option_group("iterative methods",
                                         "arap, primo: iterations per frame and stopping test; "
                                         "multiscale-volumes: --iterations");
@@ -230,7 +236,7 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
       ->capture_default_str();
 }
 
-void DeformerOptions::check_used_by(const std::vector<std::string>& methods) const {
+void DeformerOptions::check_used_by(const std::vector<std::string>& methods, const std::string& flag) const {
   const auto is_multiscale = [](const std::string& m) { return m.rfind("multiscale", 0) == 0; };
   const bool multiscale = std::any_of(methods.begin(), methods.end(), is_multiscale);
   const bool one = methods.size() == 1;
@@ -238,8 +244,7 @@ void DeformerOptions::check_used_by(const std::vector<std::string>& methods) con
     throw InvalidInput(
         "--base, --detail-scale, --fairing, --remesh-base and --base-method apply to --method "
         "multiscale; " +
-        (one ? "--method " + methods[0] + " has no"
-             : "none of --methods " + joined(methods, ", ") + " has a") +
+        (one ? flag + " " + methods[0] + " has no" : "none of " + flag + " " + joined(methods, ", ") + " has a") +
         " base to decompose");
   const auto used = [&](const std::string& m) {
     return std::find(methods.begin(), methods.end(), m) != methods.end() ||
@@ -250,13 +255,13 @@ void DeformerOptions::check_used_by(const std::vector<std::string>& methods) con
       continue;
     throw InvalidInput(scoped.option->get_name() + " applies to --method " + joined(scoped.methods, ", ") +
                        " (or multiscale with such a --base-method), not " +
-                       (one ? "--method " + methods[0] : "to any of --methods " + joined(methods, ", ")));
+                       (one ? flag + " " + methods[0] : "to any of " + flag + " " + joined(methods, ", ")));
   }
 }
 
 std::string DeformerOptions::method_name() const {
   const std::string full = method == "multiscale" ? "multiscale-" + encoding : method;
-  check_used_by({full});
+  check_used_by({full}, "--method");
   if (method == "multiscale") return full;
   if (encoding_option && encoding_option->count() > 0)
     throw InvalidInput(

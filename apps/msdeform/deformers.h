@@ -65,7 +65,8 @@ struct DeformerOptions {
   std::string method_name() const;
   // Throws InvalidInput when an option given configures none of `methods` (catalogue names): a scoped
   // option, a decomposition option or --base-method without a multi-scale method (it would be ignored).
-  void check_used_by(const std::vector<std::string>& methods) const;
+  // `flag` is the option that named the methods, for the message: "--method" or "--methods".
+  void check_used_by(const std::vector<std::string>& methods, const std::string& flag) const;
   // The settings for an edit (the decomposition resolved for it).
   MethodSettings method_settings(const EditCase& edit) const;
   // The chosen method, configured for the edit. Throws InvalidInput for an unknown name, listing the known ones.

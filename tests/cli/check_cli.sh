@@ -67,6 +67,19 @@ expect_error 1 "--iterations applies to --method arap, primo, multiscale-volumes
 expect_error 1 "none of --methods shell, arap has a base to decompose" \
   "$msdeform" compare --scenes lift --methods shell,arap --detail-scale 0.3 -o cmp-unread
 grep -q "building scene" err.txt && fail "compare built scenes before refusing an unread option"
+# Each method's own settings are refused with a method that does not read them, by either command.
+expect_error 1 "--kb applies to --method shell (or multiscale with such a --base-method), not --method arap" \
+  "$msdeform" deform --scene lift --method arap --kb 5 -o x.off
+expect_error 1 "--blend applies to --method propagate (or multiscale with such a --base-method), not --method multiscale-normal" \
+  "$msdeform" deform --scene lift --method multiscale --blend decomposed -o x.off
+expect_error 1 "--laplacian-explicit applies to --method laplacian (or multiscale with such a --base-method), not --methods gradient" \
+  "$msdeform" compare --scenes lift --methods gradient --laplacian-explicit -o cmp-unread
+"$msdeform" deform --scene lift --resolution 2k --method multiscale --base-method propagate --field euclidean \
+  -o x.off >/dev/null || fail "--field with a propagate base"
+# A reference that is not compared is refused before the output folder is made.
+expect_error 1 "the reference method 'arap' is not among the compared methods" \
+  "$msdeform" compare --scenes lift --methods shell --reference arap -o cmp-noref
+[ -e cmp-noref ] && fail "a refused compare made its output folder"
 # Without a detail layer there is nothing to iterate: no "0 iterations, relative residual -1".
 "$msdeform" deform --scene lift --resolution 16 --method multiscale --encoding volumes -o v.off >out.txt 2>&1 ||
   fail "multiscale volumes at 16 vertices"

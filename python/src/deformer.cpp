@@ -84,6 +84,9 @@ struct Option {
   std::string help;
   std::function<void(MethodSettings&, const std::string& group, py::handle value)> set;
   std::function<py::object(const MethodSettings&, const std::string& group)> get;
+  // `get` gives None where the option is not in use (no cage given, no remeshed base): None given back,
+  // as in Deformer(name, **d.options), leaves the option unset.
+  bool none_is_unset = false;
 };
 
 template <class Field>
@@ -301,7 +304,7 @@ const std::vector<Option>& options_table() {
     {
       Option o{"cage", {"cage"},
                "a closed, consistently oriented triangle cage enclosing the input: a mesh file path or a (V, F) "
-               "pair of arrays; default: an offset 26-DOP of the input",
+               "pair of arrays; None or left out: an offset 26-DOP of the input",
                [](MethodSettings& s, const std::string&, py::handle v) {
                  if (py::isinstance<py::tuple>(v) || py::isinstance<py::list>(v)) {
                    py::sequence seq = py::reinterpret_borrow<py::sequence>(v);
@@ -326,6 +329,7 @@ const std::vector<Option>& options_table() {
                  if (s.cage.cage_P.rows() == 0) return py::none();
                  return py::make_tuple(msd::Positions(s.cage.cage_P), msd::Faces(s.cage.cage_F));
                }};
+      o.none_is_unset = true;
       t.push_back(std::move(o));
     }
     t.push_back(int_option("subdivisions", {"cage"}, "generated cage: midpoint subdivisions of the 26-DOP, 0..4",
@@ -377,10 +381,18 @@ const std::vector<Option>& options_table() {
                }};
       t.push_back(std::move(o));
     }
-    t.push_back(real_option("remesh_edge_length", {"multiscale"},
-                            "remeshed base: target edge length in mesh units (0: the mean edge length); given "
-                            "without `base` it selects base='remeshed'",
-                            [](auto& s, const std::string&) -> auto& { return s.decomposition.remesh_edge_length; }));
+    {
+      Option o = real_option("remesh_edge_length", {"multiscale"},
+                             "remeshed base: target edge length in mesh units (0: the mean edge length); given "
+                             "without `base` it selects base='remeshed'; None (its value with another base): unset",
+                             [](auto& s, const std::string&) -> auto& { return s.decomposition.remesh_edge_length; });
+      const auto number = o.get;
+      o.get = [number](const MethodSettings& s, const std::string& g) -> py::object {
+        return s.decomposition.kind == msd::DecompositionKind::Remeshed ? number(s, g) : py::none();
+      };
+      o.none_is_unset = true;
+      t.push_back(std::move(o));
+    }
     t.push_back(real_option("max_fold_ratio", {"multiscale"},
                             "automatic detail scale: the search stops where details come this close to folding, (0, 1]",
                             [](auto& s, const std::string&) -> auto& { return s.decomposition.low_pass.max_fold_ratio; }));
@@ -395,7 +407,7 @@ const std::vector<Option>& options_table() {
                             }));
     {
       Option o{"control", {"multiscale"},
-               "base='subdivision': the Loop control mesh S refines (msdeform.scene(...).control)",
+               "base='subdivision': the Loop control mesh S refines (msdeform.scene(...).control); None: unset",
                [](MethodSettings& s, const std::string&, py::handle v) {
                  try {
                    s.decomposition.control = v.cast<std::shared_ptr<msd::ControlMesh>>();
@@ -408,6 +420,7 @@ const std::vector<Option>& options_table() {
                  if (!s.decomposition.control) return py::none();
                  return py::cast(std::const_pointer_cast<msd::ControlMesh>(s.decomposition.control));
                }};
+      o.none_is_unset = true;
       t.push_back(std::move(o));
     }
     t.push_back(int_option("normal_iterations", {"base-points"}, "Newton steps per vertex of the base-point search",
@@ -561,6 +574,7 @@ PyDeformer::PyDeformer(const std::string& name, const py::kwargs& options) : met
                            (is_multiscale(method) ? " with base_method='" + base_method + "'" : std::string()) + ". " +
                            takes(method, valid));
     }
+    if (o->none_is_unset && item.second.is_none()) continue;  // as left out
     o->set(settings, *group, item.second);
     given.push_back(key);
     applied.emplace_back(key, *group);

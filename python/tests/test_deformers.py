@@ -143,6 +143,20 @@ def test_options_configure_the_method(lift):
         assert type(kept) is dict and kept == arap.options  # plain dicts, free to change
 
 
+@pytest.mark.parametrize("name", [m.name for m in msdeform.methods()])
+def test_options_given_back_make_the_same_deformer(name):
+    # Deformer(name, **d.options) rebuilds d; the options not in use read None (no cage, no remeshed base).
+    options = msdeform.Deformer(name).options
+    assert msdeform.Deformer(name, **options).options == options
+    if name.startswith("multiscale"):
+        assert options["remesh_edge_length"] is None and options["control"] is None
+    if name.startswith("multiscale") and name != "multiscale-vectors":  # vectors need B's connectivity
+        remeshed = msdeform.Deformer(name, base="remeshed", remesh_edge_length=0.5).options
+        assert remeshed["remesh_edge_length"] == 0.5 and msdeform.Deformer(name, **remeshed).options == remeshed
+    if name.startswith("cage"):
+        assert options["cage"] is None
+
+
 def test_a_python_transfer_function(lift):
     linear = msdeform.Deformer("propagate")
     squared = msdeform.Deformer("propagate", transfer=lambda s: s * s)

@@ -73,15 +73,18 @@ SparseMatrix polyharmonic_matrix(const LaplaceOperator& op, int k);
 //! W diag(w) W (#V by #V) for a symmetric W (#V by #V, both triangles stored) and weights w (#V): the
 //! thin-plate matrix Q₂ = W M⁻¹ W with w = M⁻¹, or the low-pass base's bending term. Its pattern is W's
 //! 2-ring. Computed on both cores, with the values of Eigen's W * (w.asDiagonal() * W) bit for bit.
-//! \throw InvalidInput when it would have more than 2^31 − 1 nonzeros (it couples every two neighbours
-//! of a vertex: a vertex of valence 46340 or more alone does that), naming the vertex of most neighbours.
+//! \throw InvalidInput when it would have more than 2^31 − 1 nonzeros, or more than the machine's memory
+//! holds with a factorisation at 48 bytes per nonzero (measured), naming the vertex of most neighbours: it
+//! couples every two neighbours of a vertex, so a vertex of valence 46340 alone gives 2^31, and one of
+//! 23000 alone fills 24 GB.
 SparseMatrix weighted_square(const SparseMatrix& W, const Eigen::VectorXd& w);
 
 //! Refuses a product that couples every two neighbours of a vertex (W M⁻¹ W, a least-squares RᵀR over
 //! one-rings) where one vertex alone would give it more than 2^31 − 1 nonzeros, the most a sparse matrix
-//! holds: (unknowns_per_vertex · (valence + 1))² of them. W: #V by #V with one column per vertex, its
-//! pattern the one-rings. \throw InvalidInput naming `product` and the vertex of most neighbours (a
-//! fan-triangulated disk or cone: remesh it).
+//! holds, or more than fit the machine's memory with a factorisation (48 bytes per nonzero, measured):
+//! (unknowns_per_vertex · (valence + 1))² of them. W: #V by #V with one column per vertex, its pattern the
+//! one-rings. \throw InvalidInput naming `product` and the vertex of most neighbours (a fan-triangulated
+//! disk or cone: remesh it).
 void check_neighbour_coupling(const SparseMatrix& W, int unknowns_per_vertex, const std::string& product);
 
 //! Mean length of the three edges of every face of (P, F) (interior edges count twice); 0 without faces.

@@ -1,8 +1,14 @@
 #include "msdeform/core/memory.h"
 
 #include <malloc.h>
+#include <unistd.h>
 
 namespace msd {
+
+std::uint64_t physical_memory() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  return pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page) : 0;
+}
 
 void retain_freed_memory() {
   mallopt(M_MMAP_MAX, 0);                 // serve large blocks from the heap ...

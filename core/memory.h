@@ -1,7 +1,13 @@
 #pragma once
-//! \file Process-wide allocator tuning for programs that build and factor large sparse systems.
+//! \file Process-wide allocator tuning for programs that build and factor large sparse systems, and the
+//! machine's memory for refusing work that cannot fit.
+
+#include <cstdint>
 
 namespace msd {
+
+//! The machine's physical memory in bytes (sysconf), or 0 when it cannot be told.
+std::uint64_t physical_memory();
 
 //! Makes glibc's malloc keep freed memory for reuse instead of returning it to the system: large blocks
 //! come from the heap rather than fresh mmap()s, and the heap is not trimmed. CHOLMOD, OpenBLAS and

@@ -4,6 +4,7 @@
 #include <random>
 
 #include "msdeform/core/laplacian.h"
+#include "msdeform/core/memory.h"
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/core/scenes.h"
 #include "test_util.h"
@@ -154,6 +155,23 @@ TEST_CASE("weighted_square refuses a product beyond a sparse matrix's int index,
   const LaplaceOperator lap = cotan_laplacian(P, F);
   CHECK_THROWS_WITH(weighted_square(lap.W, lap.mass.cwiseInverse()),
                     Catch::Contains("more than 2^31 - 1 nonzeros") && Catch::Contains("vertex 0 has 47000"));
+}
+
+TEST_CASE("weighted_square refuses a product that would not fit in memory, naming the vertex", "[core][laplacian]") {
+  // Below 2^31 entries, a fan's W M^-1 W and its factorisation took 35 bytes per entry: a 25000-neighbour
+  // centre ran a 24 GB machine out of memory after minutes, with a bare "out of memory". The smallest fan
+  // over this machine's memory at the 48 bytes per entry assumed is refused at once.
+  const std::uint64_t memory = physical_memory();
+  REQUIRE(memory > 0);
+  const int k = static_cast<int>(std::sqrt(memory / 48.0)) + 1;
+  Positions P;
+  Faces F;
+  test::fan_disk(k, P, F);
+  const LaplaceOperator lap = cotan_laplacian(P, F);
+  const bool indexable = static_cast<double>(k + 1) * (k + 1) <= 2147483647.0;
+  CHECK_THROWS_WITH(weighted_square(lap.W, lap.mass.cwiseInverse()),
+                    Catch::Contains(indexable ? "more than this machine's" : "more than 2^31 - 1 nonzeros") &&
+                        Catch::Contains("vertex 0 has " + std::to_string(k)));
 }
 
 TEST_CASE("weighted_square is Eigen's W diag(w) W bit for bit, submatrix is the dense extraction", "[core][laplacian]") {

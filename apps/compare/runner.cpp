@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <exception>
 #include <memory>
+#include <new>
 #include <optional>
 #include <utility>
 
@@ -22,6 +23,11 @@ std::string format(const char* fmt, double x) {
   char buf[64];
   std::snprintf(buf, sizeof(buf), fmt, x);
   return buf;
+}
+
+// What went wrong, for a result's page: std::bad_alloc's own text is "std::bad_alloc".
+std::string failure(const std::exception& e) {
+  return dynamic_cast<const std::bad_alloc*>(&e) ? "out of memory" : e.what();
 }
 
 }  // namespace
@@ -53,7 +59,7 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
     try {
       step();
     } catch (const std::exception& e) {
-      reasons.push_back(std::string(metric) + " not measured: " + e.what());
+      reasons.push_back(std::string(metric) + " not measured: " + failure(e));
     }
   };
   if (!has_faces) {
@@ -128,7 +134,7 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
       r.ok = true;
     } catch (const std::exception& e) {
       r.ok = false;
-      r.error = e.what();
+      r.error = failure(e);
     }
     if (r.ok) {
       std::vector<std::string> lacking = unmeasured;
@@ -155,7 +161,7 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
           } catch (const InvalidInput& e) {
             self_intersections_refused = e.what();  // the faces, as the result is finite: so for every result
           } catch (const std::exception& e) {
-            lacking.push_back(std::string("self-intersections not measured: ") + e.what());
+            lacking.push_back("self-intersections not measured: " + failure(e));
           }
         }
         if (!self_intersections_refused.empty())

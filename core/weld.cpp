@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 #include <numeric>
+#include <regex>
 #include <string>
 #include <unordered_map>
 
@@ -144,6 +145,36 @@ Positions Weld::unweld(const Positions& welded) const {
                        std::to_string(P.rows()) + " vertices");
   Positions out(static_cast<Eigen::Index>(welded_of.size()), 3);
   for (size_t v = 0; v < welded_of.size(); ++v) out.row(static_cast<Eigen::Index>(v)) = welded.row(welded_of[v]);
+  return out;
+}
+
+int Weld::file_vertex(int w) const {
+  if (w < 0 || w >= P.rows())
+    throw InvalidInput("Weld::file_vertex: vertex " + std::to_string(w) + " is not in the welded mesh's [0, " +
+                       std::to_string(P.rows()) + ")");
+  // The group's lowest member is the first v with welded_of[v] == w (O(#V): for messages, not loops).
+  return static_cast<int>(std::find(welded_of.begin(), welded_of.end(), w) - welded_of.begin());
+}
+
+std::string Weld::in_file_numbering(const std::string& message) const {
+  static const std::regex named(R"((\bvertex |\bvertices )(\d+(?:, \d+)*))");
+  static const std::regex number(R"(\d+)");
+  std::string out;
+  auto last = message.cbegin();
+  for (std::sregex_iterator m(message.begin(), message.end(), named), end; m != end; ++m) {
+    out.append(last, (*m)[2].first);
+    const std::string list = (*m)[2].str();
+    auto from = list.cbegin();
+    for (std::sregex_iterator n(list.begin(), list.end(), number); n != end; ++n) {
+      out.append(from, (*n)[0].first);
+      const long w = std::stol((*n)[0].str());
+      out += w < P.rows() ? std::to_string(file_vertex(static_cast<int>(w))) : (*n)[0].str();
+      from = (*n)[0].second;
+    }
+    out.append(from, list.cend());
+    last = (*m)[2].second;
+  }
+  out.append(last, message.cend());
   return out;
 }
 

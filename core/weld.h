@@ -3,6 +3,7 @@
 //! as separate pieces. Counting them, and welding vertices within a distance so that a method sees one
 //! surface while the file keeps its vertices.
 
+#include <string>
 #include <vector>
 
 #include "msdeform/core/types.h"
@@ -28,6 +29,12 @@ struct Weld {
   //! Positions of the welded mesh (#W by 3) back on the original vertices (#V by 3): every member of a
   //! group gets its group's position. \throw InvalidInput for a row count other than #W.
   Positions unweld(const Positions& welded) const;
+  //! The file's vertex of welded vertex w: its group's lowest-numbered member. \throw InvalidInput for w
+  //! outside [0, #W).
+  int file_vertex(int w) const;
+  //! A message of a method that ran on the welded mesh, with the vertices it names ("vertex 12",
+  //! "vertices 3, 5, 8") renumbered to the file's (file_vertex), so the user finds them in the file.
+  std::string in_file_numbering(const std::string& message) const;
 };
 
 //! Merges vertices within eps of each other (eps in mesh units; 0: identical coordinates only).

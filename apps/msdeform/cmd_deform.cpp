@@ -95,23 +95,35 @@ void add_deform_command(CLI::App& app) {
       throw InvalidInput("--controls-output " + *controls_output + ": a lattice's control points have no faces, which "
                          "STL cannot store; use .off, .obj or .ply");
     const Positions& rest = c.P;
+    // The method runs on the welded mesh: the vertices its errors and warnings name are renumbered to the file's.
+    const auto in_file_numbering = [&](const std::string& text) {
+      return c.weld ? c.weld->in_file_numbering(text) : text;
+    };
+    const auto run = [&](auto&& step) {
+      try {
+        step();
+      } catch (const Error& e) {
+        if (!c.weld) throw;
+        throw Error(in_file_numbering(e.what()));
+      }
+    };
     auto printer = std::make_shared<ProgressPrinter>(*quiet);
     deformer->set_progress([printer](const std::string& line) { (*printer)(line); });
     (*printer)(deformer->name() + ": preparing on " + std::to_string(rest.rows()) + " vertices");
     auto t0 = Clock::now();
-    deformer->prepare(c.P, c.F, c.region);
+    run([&] { deformer->prepare(c.P, c.F, c.region); });
     const double prepare_ms = ms_since(t0);
     Positions out(rest.rows(), 3);
     // A linear method's first frame warms caches and buffers; an iterative method's one frame from rest is
     // timed alone (a warm-up would double its run: PriMo's frame takes seconds to minutes).
     if (deformer->traits().solve != DeformerSolve::Iterative) {
       (*printer)(deformer->name() + ": first frame (warms caches and buffers)");
-      deformer->deform(c.transforms, out);
+      run([&] { deformer->deform(c.transforms, out); });
       deformer->reset();  // the timed frame starts from rest too
     }
     (*printer)(deformer->name() + ": the timed frame, from rest");
     t0 = Clock::now();
-    deformer->deform(c.transforms, out);
+    run([&] { deformer->deform(c.transforms, out); });
     const double frame_ms = ms_since(t0);
     if (c.weld)
       save_mesh(c.weld->unweld(out), c.file_F, *output);  // the file's vertices and faces
@@ -169,10 +181,7 @@ void add_deform_command(CLI::App& app) {
     if (report.folded_faces >= 0)
       std::printf("  folded triangles (normal turned against the deformed base's): %d\n", report.folded_faces);
     ShapeChange shape = shape_change(rest, out, c.F, c.region);
-    if (c.weld && shape.largest_vertex >= 0) {  // the file's numbering: the first file vertex of the welded one
-      const std::vector<int>& of = c.weld->welded_of;
-      shape.largest_vertex = static_cast<int>(std::find(of.begin(), of.end(), shape.largest_vertex) - of.begin());
-    }
+    if (c.weld && shape.largest_vertex >= 0) shape.largest_vertex = c.weld->file_vertex(shape.largest_vertex);
     if (shape.edges > 0) {
       std::printf("  shape: %.3g %% of the free region's edges changed length beyond 1.5x (the most %.3gx, at vertex %d), "
                   "its area x%.3g", 100 * shape.stretched_share, shape.largest_factor, shape.largest_vertex, shape.area_ratio);
@@ -180,7 +189,7 @@ void add_deform_command(CLI::App& app) {
       std::printf("\n");
     }
     for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
-      for (const std::string& w : *list) std::fprintf(stderr, "warning: %s\n", w.c_str());
+      for (const std::string& w : *list) std::fprintf(stderr, "warning: %s\n", in_file_numbering(w).c_str());
     // An edit that scales a handle asks for area and volume to change.
     const bool scales = std::any_of(c.transforms.begin(), c.transforms.end(), [](const Mat4& T) {
       const Mat3 A = T.topLeftCorner<3, 3>();

@@ -75,6 +75,21 @@ TEST_CASE("weld: a plane split along a seam is counted, welded for the method an
   CHECK_THROWS_AS(welded.weld->unweld(split.P), InvalidInput);
 }
 
+TEST_CASE("weld: messages about the welded mesh name the file's vertices", "[core][weld]") {
+  // File vertex 1 repeats vertex 0, so welded vertices 0, 1, 2 are the file's 0, 2, 3 (--weld named the
+  // welded numbers before, which point at other vertices of the file).
+  Positions P(4, 3);
+  P << 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0;
+  Faces F(1, 3);
+  F << 1, 2, 3;
+  const Weld w = weld_vertices(P, F, 0);
+  REQUIRE(w.P.rows() == 3);
+  CHECK(w.file_vertex(2) == 3);
+  CHECK(w.in_file_numbering("shell: singular near vertex 2; vertices 0, 1, 2 moved; vertex 7 and 12 vertices") ==
+        "shell: singular near vertex 3; vertices 0, 2, 3 moved; vertex 7 and 12 vertices");
+  CHECK_THROWS_AS(w.file_vertex(3), InvalidInput);
+}
+
 TEST_CASE("weld: pieces touching at a point are no seam (welding would pinch them)", "[core][weld]") {
   // Two triangles whose corners 1 and 3 coincide, and no edge does (CGAL's elephant-with-holes has 65
   // such points where holes meet); then a copy of the edge 1-2, which is a seam.

@@ -69,7 +69,7 @@ Catalogue make_builtin() {
     c.add({"multiscale-" + encoding, "9.3",
            "multi-scale: decompose S = B ⊕ D, deform B with the base method, add the " + encoding + " details back",
            [encoding](const MethodSettings& s, const Catalogue& catalogue) -> std::unique_ptr<Deformer> {
-             if (s.base_method.rfind("multiscale", 0) == 0)
+             if (is_multiscale(s.base_method))
                throw InvalidInput("multiscale-" + encoding + ": the base method '" + s.base_method +
                                   "' is itself multi-scale; give a single-scale method (shell, propagate, ...)");
              MultiscaleOptions o;

@@ -41,6 +41,9 @@ struct MethodSettings {
 
 class Catalogue;
 
+//! Whether a catalogue name is a multi-scale method (multiscale-vectors, -normal, -volumes, -transfer).
+inline bool is_multiscale(const std::string& method) { return method.rfind("multiscale", 0) == 0; }
+
 //! One row of the catalogue.
 struct MethodEntry {
   std::string name;     //!< e.g. "shell", "multiscale-normal"

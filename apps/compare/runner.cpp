@@ -204,7 +204,7 @@ const MethodResult* best_multiscale(const std::vector<MethodResult>& results, co
   const MethodResult* best = nullptr;
   auto score = [](const MethodResult& r) { return r.reference ? r.reference->mean : r.distortion.mean; };
   for (const MethodResult& r : results)
-    if (r.ok && r.scene == scene && r.method.rfind("multiscale-", 0) == 0 && (!best || score(r) < score(*best)))
+    if (r.ok && r.scene == scene && is_multiscale(r.method) && (!best || score(r) < score(*best)))
       best = &r;
   return best;
 }

@@ -158,7 +158,7 @@ std::string figure916_html(const std::vector<MethodResult>& results, const std::
 // The command-line options of a method: the option groups of `cmd` that configure it (deformers.cpp).
 std::string method_options_html(const CLI::App& cmd, const std::string& method) {
   std::vector<std::string> groups;
-  if (method.rfind("multiscale", 0) == 0) groups = {"multiscale", "shell"};
+  if (is_multiscale(method)) groups = {"multiscale", "shell"};
   else if (method == "arap" || method == "primo") groups = {method, "iterative methods"};
   else if (method == "lattice" || method == "rbf" || method.rfind("cage", 0) == 0) groups = {"space"};
   else groups = {method};

@@ -230,14 +230,13 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
   decomposition.add_to(*ms);
   std::vector<std::string> single_scale;
   for (const auto& n : builtin_methods().names())
-    if (n.rfind("multiscale", 0) != 0) single_scale.push_back(n);
+    if (!is_multiscale(n)) single_scale.push_back(n);
   base_method_option = ms->add_option("--base-method", settings.base_method, "the method that deforms the base: " + joined(single_scale, "|"))
       ->check(CLI::IsMember(single_scale))
       ->capture_default_str();
 }
 
 void DeformerOptions::check_used_by(const std::vector<std::string>& methods, const std::string& flag) const {
-  const auto is_multiscale = [](const std::string& m) { return m.rfind("multiscale", 0) == 0; };
   const bool multiscale = std::any_of(methods.begin(), methods.end(), is_multiscale);
   const bool one = methods.size() == 1;
   if (!multiscale && (decomposition.given() || (base_method_option && base_method_option->count() > 0)))
@@ -266,7 +265,7 @@ std::string DeformerOptions::method_name() const {
   if (encoding_option && encoding_option->count() > 0)
     throw InvalidInput(
         "--encoding " + encoding + " applies to --method multiscale; --method " + method +
-        (method.rfind("multiscale", 0) == 0 ? " names its encoding itself" : " has no detail encoding"));
+        (is_multiscale(method) ? " names its encoding itself" : " has no detail encoding"));
   return method;
 }
 

@@ -753,7 +753,7 @@ void Viewer::draw_panel() {
     if (method_ == "arap" || method_ == "primo") {
       ImGui::SliderInt("iterations/frame", &options_.iterations_per_frame, 1, 50, "%d", ImGuiSliderFlags_AlwaysClamp);
     }
-    if (method_ == "shell" || method_.rfind("multiscale", 0) == 0) {
+    if (method_ == "shell" || is_multiscale(method_)) {
       float k = static_cast<float>(options_.settings.shell.ks);
       if (ImGui::SliderFloat("stretching k_s", &k, 0, 10, "%.2f", ImGuiSliderFlags_AlwaysClamp)) {
         options_.settings.shell.ks = k;

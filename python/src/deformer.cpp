@@ -23,6 +23,7 @@
 namespace msdpy {
 namespace {
 
+using msd::is_multiscale;
 using msd::MethodSettings;
 
 std::string joined(const std::vector<std::string>& items, const char* sep = ", ") {
@@ -169,8 +170,6 @@ std::string group_methods(const std::string& group) {
   if (group == "base-points") return "multiscale-normal, multiscale-volumes, multiscale-transfer";
   return group;
 }
-
-bool is_multiscale(const std::string& method) { return method.rfind("multiscale", 0) == 0; }
 
 std::vector<std::string> single_scale_methods() {
   std::vector<std::string> out;

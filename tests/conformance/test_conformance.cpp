@@ -108,7 +108,7 @@ TEST_CASE("conformance: constraints, frame report and reset", "[conformance]") {
     } else {
       CHECK(r.iterations == 0);
     }
-    if (d.name().rfind("multiscale", 0) == 0) CHECK(r.folded_faces >= 0);
+    if (is_multiscale(d.name())) CHECK(r.folded_faces >= 0);
     CHECK(r.converged);
     // A frame that did not converge or folded triangles says so (other checks may warn too, e.g. the
     // Laplacian's scale check); an identity frame below warns about nothing.

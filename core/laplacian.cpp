@@ -64,8 +64,9 @@ constexpr double kBytesPerCoupledNonzero = 48;
 
 // Refuses `product` (which couples every two neighbours of a vertex) with `entries` nonzeros when a sparse
 // matrix cannot hold them or they and the factorisation would not fit in the machine's memory (where
-// the bare "out of memory" came after minutes of work), naming the vertex of most neighbours.
-void check_entries(const SparseMatrix& W, long long entries, const std::string& product) {
+// the bare "out of memory" came after minutes of work), naming the vertex of most neighbours when its
+// block makes up much of them, and the mesh's size otherwise.
+void check_entries(const SparseMatrix& W, long long entries, int unknowns_per_vertex, const std::string& product) {
   const std::uint64_t memory = physical_memory();
   const double needed = entries * kBytesPerCoupledNonzero;
   const bool too_many = entries > std::numeric_limits<int>::max();
@@ -80,6 +81,10 @@ void check_entries(const SparseMatrix& W, long long entries, const std::string& 
       too_many ? " would have more than 2^31 - 1 nonzeros (the most a sparse matrix holds)"
                : " and its factorisation would need about " + gb(needed) + ", more than this machine's " +
                      gb(static_cast<double>(memory));
+  const double block = static_cast<double>(unknowns_per_vertex) * static_cast<double>(W.col(widest).nonZeros());
+  if (block * block < 0.25 * static_cast<double>(entries))  // many vertices, none of them a large fan
+    throw InvalidInput(product + why + " for the mesh's " + std::to_string(W.cols()) +
+                       " vertices; decimate the mesh or deform a coarser base");
   throw InvalidInput(product + why + ": it couples every two neighbours of a vertex, and vertex " +
                      std::to_string(widest) + " has " + std::to_string(W.col(widest).nonZeros() - 1) +
                      "; remesh so that no vertex has thousands of neighbours");
@@ -297,7 +302,7 @@ SparseMatrix weighted_square(const SparseMatrix& W, const Eigen::VectorXd& w) {
   }, 1024);
   long long entries = 0;
   for (long j = 0; j < n; ++j) entries += start[j + 1];
-  check_entries(W, entries, "the bi-Laplacian W M^-1 W");
+  check_entries(W, entries, 1, "the bi-Laplacian W M^-1 W");
   SparseMatrix Q = compressed_columns(n, start);
   int* index = Q.innerIndexPtr();
   double* value = Q.valuePtr();
@@ -329,7 +334,7 @@ void check_neighbour_coupling(const SparseMatrix& W, int unknowns_per_vertex, co
   const Eigen::Index widest = most_neighbours(W);
   const long long block =
       W.outerSize() > 0 ? unknowns_per_vertex * static_cast<long long>(W.col(widest).nonZeros()) : 0;
-  check_entries(W, block * block, product);
+  check_entries(W, block * block, unknowns_per_vertex, product);
 }
 
 SparseMatrix polyharmonic_matrix(const LaplaceOperator& op, int k) {

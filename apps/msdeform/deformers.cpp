@@ -78,6 +78,13 @@ DecompositionOptions DecompositionArgs::resolve(const EditCase& edit) const {
       throw InvalidInput(std::string("--remesh-base applies to --base remeshed, not --base ") + to_string(o.kind));
     o.kind = DecompositionKind::Remeshed;
   }
+  // Options of another base would be ignored.
+  if (fairing_option && fairing_option->count() > 0 && o.kind != DecompositionKind::Fairing)
+    throw InvalidInput(std::string("--fairing applies to --base fairing, not --base ") + to_string(o.kind));
+  if (scale_option && scale_option->count() > 0 && o.kind != DecompositionKind::LowPass &&
+      o.kind != DecompositionKind::Remeshed)
+    throw InvalidInput(std::string("--detail-scale applies to --base low-pass or remeshed, not --base ") +
+                       to_string(o.kind));
   if (o.kind == DecompositionKind::Subdivision) {
     if (!edit.control)
       throw InvalidInput("--base subdivision needs a mesh with Loop subdivision connectivity and its control mesh; "
@@ -114,7 +121,7 @@ void DeformerOptions::add_settings(CLI::App& cmd) {
                                                   {"harmonic", PropagationField::Harmonic}},
           CLI::ignore_case))
       ->default_str("harmonic"));
-  propagate(prop->add_option("--geodesic-time-factor", settings.propagation.geodesic.time_factor,
+  propagate(geodesic_time_option = prop->add_option("--geodesic-time-factor", settings.propagation.geodesic.time_factor,
                    "field geodesic: heat-method time step t = m h^2 (h the mean edge length)")
       ->check(CLI::Range(1e-6, 1e6))
       ->capture_default_str());
@@ -291,6 +298,9 @@ MethodSettings DeformerOptions::method_settings(const EditCase& edit) const {
     s.cage.cage_F = faces(cage);
   }
   s.decomposition = decomposition.resolve(edit);
+  if (geodesic_time_option && geodesic_time_option->count() > 0 &&
+      s.propagation.field != PropagationField::Geodesic)
+    throw InvalidInput("--geodesic-time-factor applies to --field geodesic (the heat method's time step)");
   return s;
 }
 

@@ -48,6 +48,7 @@ struct DeformerOptions {
   std::vector<Scoped> scoped_options;
   CLI::Option* iterations_option = nullptr;  // --iterations (arap and primo)
   CLI::Option* tolerance_option = nullptr;   // --tolerance
+  CLI::Option* geodesic_time_option = nullptr;  // --geodesic-time-factor (only with --field geodesic)
   int iterations = 0;                        // --iterations, copied into the method's settings when given
   double tolerance = 0;                      // --tolerance, likewise
   bool seed_least_norm = false;              // --seed-least-norm (lattice, cage-*)

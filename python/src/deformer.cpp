@@ -273,12 +273,21 @@ const std::vector<Option>& options_table() {
                }};
       t.push_back(std::move(o));
     }
-    t.push_back(real_option("margin", free_form,
+    // The generated cage's shape options read None once a cage is given (they are not in use then).
+    const auto generated_cage = [](Option o) {
+      const auto value = o.get;
+      o.get = [value](const MethodSettings& s, const std::string& g) -> py::object {
+        return g == "cage" && s.cage.cage_P.rows() > 0 ? py::none() : value(s, g);
+      };
+      o.none_is_unset = true;
+      return o;
+    };
+    t.push_back(generated_cage(real_option("margin", free_form,
                             "space left around the input's bounding box (lattice) or offset of the generated cage, "
                             "relative to the bounding-box diagonal",
                             [](auto& s, const std::string& g) -> auto& {
                               return g == "lattice" ? s.lattice.margin : s.cage.margin;
-                            }));
+                            })));
     {
       // The library's flag is affine_part, the command line's and this option's its negation.
       const auto affine_part = [](auto& s, const std::string& g) -> auto& {
@@ -331,8 +340,8 @@ const std::vector<Option>& options_table() {
       o.none_is_unset = true;
       t.push_back(std::move(o));
     }
-    t.push_back(int_option("subdivisions", {"cage"}, "generated cage: midpoint subdivisions of the 26-DOP, 0..4",
-                           [](auto& s, const std::string&) -> auto& { return s.cage.subdivisions; }));
+    t.push_back(generated_cage(int_option("subdivisions", {"cage"}, "generated cage: midpoint subdivisions of the 26-DOP, 0..4",
+                           [](auto& s, const std::string&) -> auto& { return s.cage.subdivisions; })));
     t.push_back(int_option("harmonic_resolution", {"cage-harmonic"},
                            "grid cells along the cage's longest side (4..128; memory grows with its cube: 128 takes about 40 s and "
                            "4 GB with a 186-vertex cage)",

@@ -155,6 +155,12 @@ def test_options_given_back_make_the_same_deformer(name):
         assert remeshed["remesh_edge_length"] == 0.5 and msdeform.Deformer(name, **remeshed).options == remeshed
     if name.startswith("cage"):
         assert options["cage"] is None
+        V = np.array([[x, y, z] for x in (-1, 2) for y in (-1, 2) for z in (-1, 2)], dtype=float)
+        F = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
+                      [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]], dtype=np.int32)
+        given = msdeform.Deformer(name, cage=(V, F)).options  # the generated cage's shape is not in use
+        assert given["margin"] is None and given["subdivisions"] is None
+        assert msdeform.Deformer(name, **given).options["cage"] is not None
 
 
 def test_a_python_transfer_function(lift):

@@ -76,6 +76,13 @@ expect_error 1 "--laplacian-explicit applies to --method laplacian (or multiscal
   "$msdeform" compare --scenes lift --methods gradient --laplacian-explicit -o cmp-unread
 "$msdeform" deform --scene lift --resolution 2k --method multiscale --base-method propagate --field euclidean \
   -o x.off >/dev/null || fail "--field with a propagate base"
+# Options of another field or base are refused too.
+expect_error 1 "--geodesic-time-factor applies to --field geodesic" \
+  "$msdeform" deform --scene lift --method propagate --geodesic-time-factor 50 -o x.off
+expect_error 1 "--fairing applies to --base fairing, not --base low-pass" \
+  "$msdeform" deform --scene lift --method multiscale --fairing 3 -o x.off
+expect_error 1 "--detail-scale applies to --base low-pass or remeshed, not --base fairing" \
+  "$msdeform" deform --scene lift --method multiscale --base fairing --detail-scale 0.5 -o x.off
 # A reference that is not compared is refused before the output folder is made.
 expect_error 1 "the reference method 'arap' is not among the compared methods" \
   "$msdeform" compare --scenes lift --methods shell --reference arap -o cmp-noref

@@ -47,11 +47,11 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
   base_deformer_->set_progress(progress_callback());
   try {
     base_deformer_->prepare(d.edit, d.edit_faces, d.edit_region);
-  } catch (const SolverError& e) {  // a numerical failure: B, not S, is to blame
-    throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on the base B (not the "
-                      "input mesh); the base is degenerate there, try a smaller detail scale: " + e.what());
   } catch (const InvalidInput& e) {  // a refusal of the mesh's structure (a fan too large to factor): S's too
     throw InvalidInput(name_ + ": the base deformer " + base_deformer_->name() + " on the base B: " + e.what());
+  } catch (const Error& e) {  // a numerical or topological failure: B, not S, is to blame
+    throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on the base B (not the "
+                      "input mesh); the base is degenerate there, try a smaller detail scale: " + e.what());
   }
   // B has S's outliers: Deformer::prepare has warned about them on S already.
   const auto about_outliers = [](const std::string& w) { return w.find(kOutlierWarning) != std::string::npos; };

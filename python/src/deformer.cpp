@@ -111,6 +111,17 @@ Option bool_option(std::string name, std::vector<std::string> groups, std::strin
           [field](const MethodSettings& s, const std::string& g) -> py::object { return py::bool_(field(s, g)); }};
 }
 
+// `o` reading None where `unused(settings, group)` holds (the option is not in use there), and accepting
+// None back as left out.
+template <class Unused>
+Option none_when(Option o, Unused unused) {
+  o.get = [get = o.get, unused](const MethodSettings& s, const std::string& g) -> py::object {
+    return unused(s, g) ? py::object(py::none()) : get(s, g);
+  };
+  o.none_is_unset = true;
+  return o;
+}
+
 template <class Enum>
 using Choices = std::vector<std::pair<std::string, Enum>>;
 
@@ -274,20 +285,16 @@ const std::vector<Option>& options_table() {
       t.push_back(std::move(o));
     }
     // The generated cage's shape options read None once a cage is given (they are not in use then).
-    const auto generated_cage = [](Option o) {
-      const auto value = o.get;
-      o.get = [value](const MethodSettings& s, const std::string& g) -> py::object {
-        return g == "cage" && s.cage.cage_P.rows() > 0 ? py::none() : value(s, g);
-      };
-      o.none_is_unset = true;
-      return o;
+    const auto cage_given = [](const MethodSettings& s, const std::string& g) {
+      return g == "cage" && s.cage.cage_P.rows() > 0;
     };
-    t.push_back(generated_cage(real_option("margin", free_form,
+    t.push_back(none_when(real_option("margin", free_form,
                             "space left around the input's bounding box (lattice) or offset of the generated cage, "
                             "relative to the bounding-box diagonal",
                             [](auto& s, const std::string& g) -> auto& {
                               return g == "lattice" ? s.lattice.margin : s.cage.margin;
-                            })));
+                            }),
+                            cage_given));
     {
       // The library's flag is affine_part, the command line's and this option's its negation.
       const auto affine_part = [](auto& s, const std::string& g) -> auto& {
@@ -340,8 +347,9 @@ const std::vector<Option>& options_table() {
       o.none_is_unset = true;
       t.push_back(std::move(o));
     }
-    t.push_back(generated_cage(int_option("subdivisions", {"cage"}, "generated cage: midpoint subdivisions of the 26-DOP, 0..4",
-                           [](auto& s, const std::string&) -> auto& { return s.cage.subdivisions; })));
+    t.push_back(none_when(int_option("subdivisions", {"cage"}, "generated cage: midpoint subdivisions of the 26-DOP, 0..4",
+                                     [](auto& s, const std::string&) -> auto& { return s.cage.subdivisions; }),
+                          cage_given));
     t.push_back(int_option("harmonic_resolution", {"cage-harmonic"},
                            "grid cells along the cage's longest side (4..128; memory grows with its cube: 128 takes about 40 s and "
                            "4 GB with a 186-vertex cage)",
@@ -389,18 +397,16 @@ const std::vector<Option>& options_table() {
                }};
       t.push_back(std::move(o));
     }
-    {
-      Option o = real_option("remesh_edge_length", {"multiscale"},
-                             "remeshed base: target edge length in mesh units (0: the mean edge length); given "
-                             "without `base` it selects base='remeshed'; None (its value with another base): unset",
-                             [](auto& s, const std::string&) -> auto& { return s.decomposition.remesh_edge_length; });
-      const auto number = o.get;
-      o.get = [number](const MethodSettings& s, const std::string& g) -> py::object {
-        return s.decomposition.kind == msd::DecompositionKind::Remeshed ? number(s, g) : py::none();
-      };
-      o.none_is_unset = true;
-      t.push_back(std::move(o));
-    }
+    t.push_back(none_when(real_option("remesh_edge_length", {"multiscale"},
+                                      "remeshed base: target edge length in mesh units (0: the mean edge length); "
+                                      "given without `base` it selects base='remeshed'; None (its value with "
+                                      "another base): unset",
+                                      [](auto& s, const std::string&) -> auto& {
+                                        return s.decomposition.remesh_edge_length;
+                                      }),
+                          [](const MethodSettings& s, const std::string&) {
+                            return s.decomposition.kind != msd::DecompositionKind::Remeshed;
+                          }));
     t.push_back(real_option("max_fold_ratio", {"multiscale"},
                             "automatic detail scale: the search stops where details come this close to folding, (0, 1]",
                             [](auto& s, const std::string&) -> auto& { return s.decomposition.low_pass.max_fold_ratio; }));

@@ -4,12 +4,14 @@
 //                                             the same matrix), shell, normal, vectors, transfer,
 //                                             normal-subdivision (the control-mesh base)
 // Prints one line "case size vertices prepare_s frame_ms frame_min_ms peak_MB bytes_per_vertex extra" that
-// bench/run gathers into the table of the README's performance section. The scene is the bumpy plane's
+// bench/run gathers into the table of the README's performance section. MSD_BENCH_FRAMES=N times N frames
+// (default 31, transfer 11), e.g. to profile the frame alone. The scene is the bumpy plane's
 // `lift` edit; the multi-scale cases use the low-pass base at detail scale 0.3 (bench_multiscale's setting).
 #include <sys/resource.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
@@ -128,7 +130,10 @@ int main(int argc, char** argv) {
   deformer->prepare(scene.P, scene.F, scene.region);
   const double prepare = seconds_since(t0);
   msd::Positions out(nv, 3);
-  const auto frames = time_frames(what == "transfer" ? 11 : 31, [&](int) { deformer->deform(scene.transforms, out); });
+  // MSD_BENCH_FRAMES sets the number of frames timed (more for a profile of the frame alone).
+  const char* frames_env = std::getenv("MSD_BENCH_FRAMES");
+  const int num_frames = frames_env && std::atoi(frames_env) > 0 ? std::atoi(frames_env) : what == "transfer" ? 11 : 31;
+  const auto frames = time_frames(num_frames, [&](int) { deformer->deform(scene.transforms, out); });
   print(what.c_str(), size, nv, prepare, frames, "");
   return 0;
 }

@@ -91,6 +91,8 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
           a.reason += (a.reason.empty() ? "" : "; ") + std::to_string(r.folded_faces) + " triangles folded over the base";
         continue;
       }
+      // Without a self-intersection count, nothing says the result is unbroken: at most fair, and said so.
+      const bool intersections_counted = r.self_intersections >= 0;
       std::vector<std::string> poor, fair, good;
       if (r.rigidity.count > 0 && std::isfinite(best_rigidity)) {
         const double ratio = r.rigidity.mean / std::max(best_rigidity, t.rigid_floor);
@@ -102,7 +104,7 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         else if (ratio > t.fair_rigidity) fair.push_back(text);
         else
           good.push_back(r.rigidity.mean <= t.rigid_floor ? "rigid (rigidity error " + fmt("%.2g", r.rigidity.mean) + ")"
-                         : ratio <= 1                   ? "the most rigid unbroken result"
+                         : ratio <= 1 ? (intersections_counted ? "the most rigid unbroken result" : "the most rigid result")
                                   : "rigid (" + fmt("%.2g", ratio) + "× the most rigid unbroken result)");
       }
       if (r.distortion.count > 0) {
@@ -120,7 +122,8 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         const std::vector<std::string>& why = !poor.empty() ? poor : !fair.empty() ? fair : good;
         a.verdict = !poor.empty() ? Verdict::Poor : !fair.empty() ? Verdict::Fair : Verdict::Good;
         for (const std::string& w : why) a.reason += (a.reason.empty() ? "" : "; ") + w;
-        if (!r.warning.empty() && a.verdict == Verdict::Good) a.verdict = Verdict::Fair;
+        if ((!r.warning.empty() || !intersections_counted) && a.verdict == Verdict::Good) a.verdict = Verdict::Fair;
+        if (!intersections_counted) a.reason += "; self-intersections not counted";
       }
       if (!r.warning.empty()) a.reason += "; warning: " + shortened(r.warning);
     }

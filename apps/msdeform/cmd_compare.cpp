@@ -225,7 +225,8 @@ std::string verdicts_html(const std::vector<MethodResult>& results, const std::v
     << 100 * t.poor_distortion << " %), <span class=\"broken\">broken</span> (self-intersecting triangles the edit added, or "
        "triangles folded over a multi-scale base), <span class=\"not-judged\">not judged</span> (no rigidity or "
        "detail measure, e.g. a point cloud), <span class=\"failed\">failed</span> (with its message); a method "
-       "that warned (e.g. did not converge) is at most fair, and says why. "
+       "that warned (e.g. did not converge), or whose self-intersections were not counted, is at most fair, and "
+       "says why. "
        "★ marks the best of each edit: of the results with the best verdict there, the most rigid, then the "
        "least detail change (so a good result outranks a more rigid fair one).</p>\n"
        "<table class=\"verdicts\"><tr><th></th>";

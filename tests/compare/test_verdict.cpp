@@ -93,6 +93,18 @@ TEST_CASE("verdicts: a warning caps the verdict at fair, and a result without qu
   CHECK(std::string(to_string(Verdict::NotJudged)) == "not-judged");
 }
 
+TEST_CASE("verdicts: a result whose self-intersections were not counted is not called unbroken", "[compare][verdict]") {
+  // With the count refused (a fan too large for it) the summary said "good: the most rigid unbroken result".
+  std::vector<MethodResult> results = {result("lift", "arap", 0.01, 0.02, -1), result("lift", "shell", 0.03, 0.02, -1)};
+  const std::vector<Assessment> a = assess(results);
+  CHECK(a[0].verdict == Verdict::Fair);
+  CHECK(a[0].best);
+  CHECK_THAT(a[0].reason, Contains("the most rigid result") && Contains("self-intersections not counted"));
+  CHECK_THAT(a[0].reason, !Contains("unbroken"));
+  CHECK(a[1].verdict == Verdict::Fair);
+  CHECK_THAT(verdict_summary(results, a), !Contains("the most rigid unbroken"));
+}
+
 TEST_CASE("verdicts: the summary gives the best's verdict, and says when an edit has no usable result",
           "[compare][verdict]") {
   // The survey cylinder said "best arap" with ARAP in the poor list on the next line, and an edit whose

@@ -285,9 +285,18 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
 
   system_.prepare(Q, known);
 
-  // The Dirichlet values are the constrained vertices' normal-displacement reconstruction: normal_ places
-  // only those (every other vertex is "placed" by the solve), with B' normals only where they read them.
-  normal_.set_placed_vertices(system_.unknown());
+  // The Dirichlet values: the rows the caller places (placed_vertices()) as it wrote them, the other
+  // constrained vertices' normal-displacement reconstruction. normal_ reconstructs only those (every other
+  // vertex is placed by the solve or by the caller), with B' normals only where they read them.
+  {
+    std::vector<char> reconstructed = placed_mask(ns, "DeformationTransfer::encode");
+    for (char& r : reconstructed) r = !r;
+    for (int v : system_.unknown()) reconstructed[v] = 0;
+    std::vector<int> not_reconstructed;
+    for (long v = 0; v < ns; ++v)
+      if (!reconstructed[v]) not_reconstructed.push_back(static_cast<int>(v));
+    normal_.set_placed_vertices(std::move(not_reconstructed));
+  }
   normal_.encode(S, Fs, B, Fb);
 
   frame_.setZero(static_cast<long>(slot_faces_.size()), 9);
@@ -299,6 +308,7 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   rest_extent_ = rest.diagonal();
   report.factor_seconds = seconds_since(t0);
   report_ = std::move(report);
+  num_vertices_ = ns;
   encoded_ = true;
 }
 
@@ -349,9 +359,10 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
     }
   });
 
-  // Dirichlet values: the normal-displacement reconstruction b' + h n' of the constrained vertices, written
-  // into their rows of out.
-  normal_.reconstruct(B_deformed, out);  // sizes out to #Vs rows
+  // Dirichlet values: the placed rows as the caller wrote them, the normal-displacement reconstruction
+  // b' + h n' of the other constrained vertices written into their rows of out.
+  size_output(out, num_vertices_, where);
+  normal_.reconstruct(B_deformed, out);
   const std::vector<int>& known = system_.known();
   parallel_for_chunks(static_cast<long>(known.size()), [&](long begin, long end) {
     for (long k = begin; k < end; ++k) known_values_.row(k) = out.row(known[k]);

@@ -47,12 +47,14 @@ namespace msd {
 //! origin. Translating or scaling S, B and B' together translates or scales S' (to rounding).
 //!
 //! Dirichlet constraints: the anchor vertices (set_anchor_vertices, e.g. the multi-scale deformer's fixed
-//! and handle vertices) are placed at their normal-displacement reconstruction b'_i + h_i n'_i on B'
-//! (= B' exactly where S = B, as on the deformer's constrained vertices). A connected component of S
-//! without an anchor — e.g. all of S when no anchors are given — has its lowest-indexed vertex pinned the
-//! same way, so the system is positive definite (report().pinned_vertices). The values come from
-//! normal_displacements(), encoded to reconstruct only these constrained vertices (its placed vertices are
-//! the others), with B' normals only where they read them.
+//! and handle vertices). Those the caller places (set_placed_vertices: the multi-scale deformer puts them
+//! at T_k p before reconstruct()) keep the rows it wrote, so the solve ends at the positions returned
+//! there; the others are placed at their normal-displacement reconstruction b'_i + h_i n'_i on B' (= B'
+//! exactly where S = B). A connected component of S without an anchor — e.g. all of S when no anchors are
+//! given — has its lowest-indexed vertex pinned the same way, so the system is positive definite
+//! (report().pinned_vertices). The reconstructed values come from normal_displacements(), encoded to
+//! reconstruct only those constrained vertices (its placed vertices are the others), with B' normals only
+//! where they read them.
 //!
 //! Result check: before returning, reconstruct() verifies that every vertex of S' is finite and within
 //! 2 × (diagonal of B' ∪ Dirichlet values + diagonal of S ∪ B) of the bounding box of B' ∪ Dirichlet
@@ -99,10 +101,11 @@ class DeformationTransfer : public DetailEncoding {
   const Eigen::VectorXi& source_faces() const { return source_face_; }
   //! The vertices held fixed in the solve (anchors, then pinned vertices), in solve order.
   const std::vector<int>& constrained_vertices() const { return system_.known(); }
-  //! The normal displacements of S on B that give the Dirichlet values: they reconstruct only the
-  //! constrained vertices (their placed_vertices() are the others).
+  //! The normal displacements of S on B that give the Dirichlet values the caller does not place: they
+  //! reconstruct only those constrained vertices (their placed_vertices() are the others).
   const NormalDisplacements& normal_displacements() const { return normal_; }
-  //! Newton fallbacks among the constrained vertices (the only base points that reach S').
+  //! Newton fallbacks among the constrained vertices the caller does not place (the only base points that
+  //! reach S').
   std::vector<std::string> encode_warnings() const override { return normal_.encode_warnings(); }
 
  private:
@@ -115,6 +118,7 @@ class DeformationTransfer : public DetailEncoding {
   NormalDisplacements normal_;
   bool encoded_ = false;
   int num_base_vertices_ = 0;
+  long num_vertices_ = 0;  // of S
   Faces base_faces_;
   // Per base face: the face whose frame it uses (itself unless degenerate or a needle).
   Eigen::VectorXi frame_face_;

@@ -204,7 +204,7 @@ void DisplacementVectors::reconstruct(const Positions& B_deformed, Positions& ou
     throw UsageError("DisplacementVectors::reconstruct: deformed base has " +
                      std::to_string(B_deformed.rows()) + " vertices, the encoded base had " +
                      std::to_string(nv));
-  if (out.rows() != nv) out.resize(nv, 3);
+  size_output(out, nv, "DisplacementVectors::reconstruct");
   const double* const c = coefficients_.data();  // column-major: α, β, γ (or the world vector)
   double* const o = out.data();
   std::atomic<bool> finite{true};  // x − x is 0 for a finite x, NaN otherwise

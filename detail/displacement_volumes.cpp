@@ -264,6 +264,7 @@ void DisplacementVolumes::encode(const Positions& S, const Faces& Fs, const Posi
                          std::to_string(ns) + ")");
     anchored_[v] = 1;
   }
+  placed_row_ = placed_mask(ns, where);
   normal_.encode(S, Fs, B, Fb);
   faces_ = Fs;
   base_faces_ = Fb;
@@ -462,9 +463,10 @@ void DisplacementVolumes::reconstruct(const Positions& B_deformed, Positions& ou
     have_previous_ = true;
   }
 
-  if (out.rows() != ns) out.resize(ns, 3);
+  size_output(out, ns, where);
   bool finite = true;
   for (long i = 0; i < ns; ++i) {
+    if (placed_row_[i]) continue;  // written by the caller
     out.row(i) = frame_.row(i).head<3>() + height_[i] * frame_.row(i).tail<3>();
     finite = finite && out.row(i).allFinite();
   }

@@ -232,6 +232,7 @@ class DisplacementVolumes : public DetailEncoding {
   Eigen::VectorXd trust_;           // max_height_change · η_i (may be infinite)
   std::vector<char> active_;        // per prism
   std::vector<char> anchored_;      // per vertex: held at its encoded height
+  std::vector<char> placed_row_;    // per vertex: its row of S' written by the caller (placed_vertices())
   // CSR incidence of S: for vertex i, its corners 3t + l (vertex i is corner l of triangle t).
   std::vector<int> incidence_offsets_, incidence_corners_;
   VertexNormals base_normals_;

@@ -34,12 +34,14 @@ class DetailEncoding {
   //! Call before encode(). \throw InvalidInput on an index out of range at encode().
   virtual void set_anchor_vertices(std::vector<int> vertices) { anchors_ = std::move(vertices); }
   const std::vector<int>& anchor_vertices() const { return anchors_; }
-  //! Vertices of S whose rows of S' the caller writes itself after every reconstruct() (the multi-scale
-  //! deformer places its fixed and handle vertices exactly). reconstruct() may then leave those rows as
-  //! they are and skip the work only they need: normal displacements and vectors do (their interpolation,
-  //! and the base normals or frames no other vertex reads; they then check only the rows of B' they read)
-  //! and throw InvalidInput at encode() on an index out of range; the other encodings ignore the list and
-  //! write every row. Empty by default. Call before encode().
+  //! Vertices of S whose rows of S' the caller writes itself, before every reconstruct() (the multi-scale
+  //! deformer places its fixed and handle vertices exactly where the edit puts them). reconstruct() then
+  //! needs out with #Vs rows on entry, leaves those rows as they are, and skips the work only they need:
+  //! normal displacements and vectors their interpolation and the base normals or frames no other vertex
+  //! reads (they then check only the rows of B' they read); deformation transfer takes the Dirichlet
+  //! values of its placed anchors from those rows, so its Poisson solve ends at the positions returned
+  //! there, and reconstructs only the others. Empty by default. Call before encode(); encode() throws
+  //! InvalidInput on an index out of range.
   void set_placed_vertices(std::vector<int> vertices) { placed_ = std::move(vertices); }
   const std::vector<int>& placed_vertices() const { return placed_; }
 
@@ -60,6 +62,16 @@ class DetailEncoding {
       throw UsageError(
           std::string(where) +
           ": out is the deformed base itself; S' is written while B' is read, pass another matrix");
+  }
+
+  //! Sizes out to num_vertices rows for reconstruct(). With placed vertices their rows must be there
+  //! already: \throw UsageError naming `where` when out has another number of rows.
+  void size_output(Positions& out, long num_vertices, const char* where) const {
+    if (out.rows() == num_vertices && out.cols() == 3) return;
+    if (!placed_.empty())
+      throw UsageError(std::string(where) + ": out has " + std::to_string(out.rows()) + " rows; with placed vertices " +
+                       "it must have S's " + std::to_string(num_vertices) + ", the placed rows written by the caller");
+    out.resize(num_vertices, 3);
   }
 
   //! placed_vertices() as a mask over the num_vertices vertices of S.

@@ -293,9 +293,9 @@ void NormalDisplacements::reconstruct(const Positions& B_deformed, Positions& ou
     throw UsageError("NormalDisplacements::reconstruct: deformed base has " +
                      std::to_string(B_deformed.rows()) + " vertices, the encoded base had " +
                      std::to_string(num_base_vertices_));
-  normals_.compute(B_deformed, normal_buffer_);
   const long ns = static_cast<long>(face_.size());
-  if (out.rows() != ns) out.resize(ns, 3);
+  size_output(out, ns, "NormalDisplacements::reconstruct");
+  normals_.compute(B_deformed, normal_buffer_);
   const phong::Columns Bc(B_deformed);
   const phong::Rows Nc(normal_buffer_);
   double* const ox = out.data();

@@ -88,10 +88,11 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
   }
   if (d.base_is_input)
     out = base_deformed_;  // no detail layer: S' = B'
-  else
-    encoding_->reconstruct(base_deformed_, out);  // S' = B' ⊕ D
+  else if (out.rows() != rest_.rows() || out.cols() != 3)
+    out.resize(rest_.rows(), 3);
   // Fixed and handle vertices exactly where the edit puts them (the details reproduce them only to the
-  // encoding's accuracy); a whole-body handle holds a large share of the vertices, so on both cores.
+  // encoding's accuracy), before the details: the encoding leaves these rows, and deformation transfer
+  // ends its solve there. A whole-body handle holds a large share of the vertices, so on both cores.
   // The placed rows are checked finite here, the others by the encoding (it throws on a non-finite row
   // it writes): end_frame() need not read S' again.
   std::atomic<bool> placed_finite{true};
@@ -106,7 +107,17 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
     }
     if (!(check == 0)) placed_finite = false;
   });
-  if (placed_finite && !d.base_is_input) set_output_checked_finite();
+  if (!placed_finite)  // before the details: deformation transfer would solve from it
+    for (const auto& [v, k] : placed_)
+      if (!out.row(v).allFinite())
+        throw SolverError(name_ + ": the frame gave vertex " + std::to_string(v) + " a non-finite position (" +
+                              (k < 0 ? std::string("a fixed vertex") : "handle " + std::to_string(k) + "'s transform") +
+                              " overflowed it)",
+                          v);
+  if (!d.base_is_input) {
+    encoding_->reconstruct(base_deformed_, out);  // S' = B' ⊕ D
+    set_output_checked_finite();
+  }
   FrameReport& r = frame_report_;
   const FrameReport& base = base_deformer_->frame_report();
   r.iterations = base.iterations;

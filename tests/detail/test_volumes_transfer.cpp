@@ -534,3 +534,39 @@ TEST_CASE("volumes and transfer: reconstruct reuses out", "[detail][volumes][tra
     CHECK(test::max_row_distance(out, s.P) <= 1e-9 * bounding_box_diagonal(s.P));
   }
 }
+
+TEST_CASE("every encoding leaves the placed rows as the caller wrote them, and transfer solves from them",
+          "[detail][volumes][transfer]") {
+  // Displacement volumes and deformation transfer wrote every row, and transfer took its Dirichlet values
+  // from its own normal displacements: the multi-scale deformer's placed handle vertices (T p) were not
+  // where the solve had ended, a step at the region's border.
+  SceneOptions o;
+  o.resolution = 2000;
+  const Scene s = make_surface(SceneShape::Plane, o);
+  const Positions bent = bend120()(s.smooth);
+  const std::vector<int>& placed = s.region.constrained_vertices();
+  REQUIRE(!placed.empty());
+  const double diagonal = bounding_box_diagonal(s.P);
+  for (const std::string& name : encoding_names()) {
+    INFO(name);
+    const std::unique_ptr<DetailEncoding> e = encoded(name, s, true);
+    Positions out = Positions::Zero(s.P.rows(), 3);
+    for (int v : placed) out.row(v) = bent.row(v) + Eigen::RowVector3d(0.5, -0.25, 0.125);
+    const Positions written = out;
+    e->reconstruct(bent, out);
+    double moved = 0;
+    for (int v : placed) moved = std::max(moved, (out.row(v) - written.row(v)).norm());
+    CHECK(moved == 0);
+    if (name != "transfer") continue;
+    // Every Dirichlet value moved by c: Q's rows sum to zero, so every solved vertex moves by c too.
+    const Eigen::RowVector3d c(0.01, 0.02, -0.03);
+    Positions shifted = out;
+    for (int v : placed) shifted.row(v) += c;
+    e->reconstruct(bent, shifted);
+    CHECK(test::max_row_distance(shifted.rowwise() - c, out) <= 1e-9 * diagonal);
+  }
+  // With placed vertices, out must already have S's rows (the placed ones written).
+  const std::unique_ptr<DetailEncoding> e = encoded("normal", s, true);
+  Positions wrong(3, 3);
+  CHECK_THROWS_AS(e->reconstruct(bent, wrong), UsageError);
+}

@@ -122,6 +122,13 @@ Option none_when(Option o, Unused unused) {
   return o;
 }
 
+// The low-pass base's detail scale is read by the low-pass and remeshed bases (as the command line's
+// --detail-scale), not by the fairing or subdivision ones.
+bool reads_detail_scale(const MethodSettings& s) {
+  return s.decomposition.kind != msd::DecompositionKind::Fairing &&
+         s.decomposition.kind != msd::DecompositionKind::Subdivision;
+}
+
 template <class Enum>
 using Choices = std::vector<std::pair<std::string, Enum>>;
 
@@ -233,9 +240,15 @@ const std::vector<Option>& options_table() {
                }};
       t.push_back(std::move(o));
     }
-    t.push_back(real_option("geodesic_time_factor", {"propagate"},
-                            "field='geodesic': heat-method time step t = m h^2 (h the mean edge length)",
-                            [](auto& s, const std::string&) -> auto& { return s.propagation.geodesic.time_factor; }));
+    t.push_back(none_when(real_option("geodesic_time_factor", {"propagate"},
+                                      "field='geodesic': heat-method time step t = m h^2 (h the mean edge length); "
+                                      "None (its value with another field): unset",
+                                      [](auto& s, const std::string&) -> auto& {
+                                        return s.propagation.geodesic.time_factor;
+                                      }),
+                          [](const MethodSettings& s, const std::string&) {
+                            return s.propagation.field != msd::PropagationField::Geodesic;
+                          }));
     // laplacian (9.4.2)
     t.push_back(bool_option("implicit", {"laplacian"},
                             "True: implicit linearised similarities (9.11); False: the explicit variant with "
@@ -375,10 +388,14 @@ const std::vector<Option>& options_table() {
     }
     t.push_back(choice_option("base", {"multiscale"}, "how the smooth base B is computed from S", kBases,
                               [](auto& s, const std::string&) -> auto& { return s.decomposition.kind; }));
-    t.push_back(real_option("detail_scale", {"multiscale"},
-                            "low-pass base: features shorter than this length (mesh units) are details; 0 chooses "
-                            "it from the detail heights",
-                            [](auto& s, const std::string&) -> auto& { return s.decomposition.low_pass.detail_scale; }));
+    t.push_back(none_when(real_option("detail_scale", {"multiscale"},
+                                      "low-pass base: features shorter than this length (mesh units) are details; 0 "
+                                      "chooses it from the detail heights; None (its value with a fairing or "
+                                      "subdivision base): unset",
+                                      [](auto& s, const std::string&) -> auto& {
+                                        return s.decomposition.low_pass.detail_scale;
+                                      }),
+                          [](const MethodSettings& s, const std::string&) { return !reads_detail_scale(s); }));
     {
       Option o{"fairing", {"multiscale"},
                "base='fairing': the order of the fairing, 1 | 2 | 3 or 'membrane' | 'thin-plate' | 'minimum-variation'",
@@ -395,7 +412,9 @@ const std::vector<Option>& options_table() {
                [](const MethodSettings& s, const std::string&) -> py::object {
                  return choice_label(s.decomposition.fairing, kFairings);
                }};
-      t.push_back(std::move(o));
+      t.push_back(none_when(std::move(o), [](const MethodSettings& s, const std::string&) {
+        return s.decomposition.kind != msd::DecompositionKind::Fairing;
+      }));
     }
     t.push_back(none_when(real_option("remesh_edge_length", {"multiscale"},
                                       "remeshed base: target edge length in mesh units (0: the mean edge length); "
@@ -606,6 +625,15 @@ PyDeformer::PyDeformer(const std::string& name, const py::kwargs& options) : met
       throw py::value_error("Deformer('" + method + "'): remesh_edge_length applies to base='remeshed', not base='" +
                             msd::to_string(settings.decomposition.kind) + "'");
   }
+  if (was_given("fairing") && settings.decomposition.kind != msd::DecompositionKind::Fairing)
+    throw py::value_error("Deformer('" + method + "'): fairing applies to base='fairing', not base='" +
+                          msd::to_string(settings.decomposition.kind) + "'");
+  if (was_given("detail_scale") && !reads_detail_scale(settings))
+    throw py::value_error("Deformer('" + method + "'): detail_scale applies to the low-pass and remeshed bases, not "
+                          "base='" + msd::to_string(settings.decomposition.kind) + "'");
+  if (was_given("geodesic_time_factor") && settings.propagation.field != msd::PropagationField::Geodesic)
+    throw py::value_error("Deformer('" + method + "'): geodesic_time_factor applies to field='geodesic', not field='" +
+                          choice_label(settings.propagation.field, kFields).cast<std::string>() + "'");
   if (was_given("control") && settings.decomposition.kind != msd::DecompositionKind::Subdivision)
     throw py::value_error("Deformer('" + method + "'): control applies to base='subdivision', not base='" +
                           msd::to_string(settings.decomposition.kind) + "'");

@@ -212,6 +212,21 @@ def test_unknown_method_and_options_are_refused_by_name():
         msdeform.Deformer("arap", iterations=2**63)
     with pytest.raises(ValueError, match="control applies to base='subdivision'"):
         msdeform.Deformer("multiscale-normal", control=msdeform.scene("lift", 100).control)
+    # Settings of another base or field were accepted and ignored (the command line refused them).
+    with pytest.raises(ValueError, match="fairing applies to base='fairing', not base='low-pass'"):
+        msdeform.Deformer("multiscale-normal", fairing=2)
+    with pytest.raises(ValueError, match="detail_scale applies to the low-pass and remeshed bases, not base='fairing'"):
+        msdeform.Deformer("multiscale-normal", base="fairing", detail_scale=0.3)
+    with pytest.raises(ValueError, match="geodesic_time_factor applies to field='geodesic', not field='harmonic'"):
+        msdeform.Deformer("propagate", geodesic_time_factor=2)
+    with pytest.raises(ValueError, match="geodesic_time_factor applies to field='geodesic'"):
+        msdeform.Deformer("multiscale-normal", base_method="propagate", geodesic_time_factor=2)
+    # Where they apply they are taken, and read back; elsewhere they read None.
+    assert msdeform.Deformer("multiscale-normal", base="fairing", fairing=3).options["fairing"] == "minimum-variation"
+    assert msdeform.Deformer("multiscale-normal", base="fairing").options["detail_scale"] is None
+    assert msdeform.Deformer("multiscale-normal").options["fairing"] is None
+    assert msdeform.Deformer("propagate", field="geodesic", geodesic_time_factor=2).options["geodesic_time_factor"] == 2
+    assert msdeform.Deformer("propagate").options["geodesic_time_factor"] is None
 
 
 def test_coordinates_that_overflow_lengths_are_named(lift):

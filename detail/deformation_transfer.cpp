@@ -114,6 +114,9 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
     if (a < 0 || a >= ns)
       throw InvalidInput(std::string(where) + ": anchor vertex " + std::to_string(a) + " out of range [0, " +
                          std::to_string(ns) + ")");
+  const std::vector<char> placed = placed_mask(ns, where);  // held where the caller writes them: anchors too
+  for (long v = 0; v < ns; ++v)
+    if (placed[v]) anchors.push_back(static_cast<int>(v));
   std::sort(anchors.begin(), anchors.end());
   anchors.erase(std::unique(anchors.begin(), anchors.end()), anchors.end());
 
@@ -289,8 +292,8 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   // constrained vertices' normal-displacement reconstruction. normal_ reconstructs only those (every other
   // vertex is placed by the solve or by the caller), with B' normals only where they read them.
   {
-    std::vector<char> reconstructed = placed_mask(ns, "DeformationTransfer::encode");
-    for (char& r : reconstructed) r = !r;
+    std::vector<char> reconstructed(ns);
+    for (long v = 0; v < ns; ++v) reconstructed[v] = !placed[v];
     for (int v : system_.unknown()) reconstructed[v] = 0;
     std::vector<int> not_reconstructed;
     for (long v = 0; v < ns; ++v)

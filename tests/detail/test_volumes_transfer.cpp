@@ -565,6 +565,20 @@ TEST_CASE("every encoding leaves the placed rows as the caller wrote them, and t
     e->reconstruct(bent, shifted);
     CHECK(test::max_row_distance(shifted.rowwise() - c, out) <= 1e-9 * diagonal);
   }
+  // A placed vertex that is not an anchor is held where the caller wrote it too.
+  DeformationTransfer dt;
+  dt.set_anchor_vertices(placed);
+  std::vector<int> more = placed;
+  REQUIRE(!s.region.free_vertices().empty());
+  const int free_vertex = s.region.free_vertices()[s.region.free_vertices().size() / 2];
+  more.push_back(free_vertex);
+  dt.set_placed_vertices(more);
+  dt.encode(s.P, s.F, s.smooth, s.F);
+  Positions out = bent;
+  out.row(free_vertex) += Eigen::RowVector3d(0, 0, 0.25);
+  const Eigen::RowVector3d held = out.row(free_vertex);
+  dt.reconstruct(bent, out);
+  CHECK(out.row(free_vertex) == held);
   // With placed vertices, out must already have S's rows (the placed ones written).
   const std::unique_ptr<DetailEncoding> e = encoded("normal", s, true);
   Positions wrong(3, 3);

@@ -332,7 +332,7 @@ std::string shape_change_warning(const ShapeChange& c, bool edit_scales) {
     add(text);
   }
   if (!edit_scales && c.volume_change && std::abs(*c.volume_change) > 0.3) {
-    std::snprintf(text, sizeof text, "the volume changed by %+.0f %%", 100 * *c.volume_change);
+    std::snprintf(text, sizeof text, "the volume changed by %+.3g %%", 100 * *c.volume_change);
     add(text);
   }
   if (why.empty()) return why;

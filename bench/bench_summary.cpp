@@ -130,9 +130,18 @@ int main(int argc, char** argv) {
   deformer->prepare(scene.P, scene.F, scene.region);
   const double prepare = seconds_since(t0);
   msd::Positions out(nv, 3);
-  // MSD_BENCH_FRAMES sets the number of frames timed (more for a profile of the frame alone).
-  const char* frames_env = std::getenv("MSD_BENCH_FRAMES");
-  const int num_frames = frames_env && std::atoi(frames_env) > 0 ? std::atoi(frames_env) : what == "transfer" ? 11 : 31;
+  // MSD_BENCH_FRAMES sets the number of frames timed (more for a profile of the frame alone): a whole
+  // number from 1 to 1000000, else refused.
+  int num_frames = what == "transfer" ? 11 : 31;
+  if (const char* text = std::getenv("MSD_BENCH_FRAMES")) {
+    char* end = nullptr;
+    const long n = std::strtol(text, &end, 10);
+    if (end == text || *end != '\0' || n < 1 || n > 1000000) {
+      std::fprintf(stderr, "bench_summary: MSD_BENCH_FRAMES='%s' is not a whole number from 1 to 1000000\n", text);
+      return 2;
+    }
+    num_frames = static_cast<int>(n);
+  }
   const auto frames = time_frames(num_frames, [&](int) { deformer->deform(scene.transforms, out); });
   print(what.c_str(), size, nv, prepare, frames, "");
   return 0;

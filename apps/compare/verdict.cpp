@@ -70,9 +70,14 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
     const std::vector<size_t> ids = of_scene(results, scene);
     auto broken = [&](const MethodResult& r) { return r.self_intersections > 0 || r.folded_faces > 0; };
     double best_rigidity = INFINITY;
+    bool best_counted = true;  // the most rigid result had its self-intersections counted (else: not known unbroken)
     for (size_t i : ids)
-      if (results[i].ok && !broken(results[i]) && results[i].rigidity.count > 0)
-        best_rigidity = std::min(best_rigidity, results[i].rigidity.mean);
+      if (results[i].ok && !broken(results[i]) && results[i].rigidity.count > 0 &&
+          results[i].rigidity.mean < best_rigidity) {
+        best_rigidity = results[i].rigidity.mean;
+        best_counted = results[i].self_intersections >= 0;
+      }
+    const std::string most_rigid = best_counted ? "the most rigid unbroken result" : "the most rigid result";
     for (size_t i : ids) {
       const MethodResult& r = results[i];
       Assessment& a = out[i];
@@ -99,13 +104,13 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         const std::string times = fmt(ratio < 10 ? "%.2g" : "%.0f", ratio);
         // Relative to the unbroken results only: a broken one may well be more rigid (ARAP through itself).
         const std::string text =
-            "rigidity " + times + "× the edit's most rigid unbroken result (the shape shears or stretches)";
+            "rigidity " + times + "× the edit's " + most_rigid.substr(4) + " (the shape shears or stretches)";
         if (ratio > t.poor_rigidity) poor.push_back(text);
         else if (ratio > t.fair_rigidity) fair.push_back(text);
         else
           good.push_back(r.rigidity.mean <= t.rigid_floor ? "rigid (rigidity error " + fmt("%.2g", r.rigidity.mean) + ")"
-                         : ratio <= 1 ? (intersections_counted ? "the most rigid unbroken result" : "the most rigid result")
-                                  : "rigid (" + fmt("%.2g", ratio) + "× the most rigid unbroken result)");
+                         : ratio <= 1 ? (intersections_counted ? most_rigid : "the most rigid result")
+                                  : "rigid (" + fmt("%.2g", ratio) + "× " + most_rigid + ")");
       }
       if (r.distortion.count > 0) {
         const double d = r.distortion.mean;

@@ -183,8 +183,11 @@ void add_deform_command(CLI::App& app) {
     ShapeChange shape = shape_change(rest, out, c.F, c.region);
     if (c.weld && shape.largest_vertex >= 0) shape.largest_vertex = c.weld->file_vertex(shape.largest_vertex);
     if (shape.edges > 0) {
-      std::printf("  shape: %.3g %% of the free region's edges changed length beyond 1.5x (the most %.3gx, at vertex %d), "
-                  "its area x%.3g", 100 * shape.stretched_share, shape.largest_factor, shape.largest_vertex, shape.area_ratio);
+      // No vertex when no edge changed length at all (the largest factor is then 1).
+      const std::string at =
+          shape.largest_vertex >= 0 ? ", at vertex " + std::to_string(shape.largest_vertex) : std::string();
+      std::printf("  shape: %.3g %% of the free region's edges changed length beyond 1.5x (the most %.3gx%s), "
+                  "its area x%.3g", 100 * shape.stretched_share, shape.largest_factor, at.c_str(), shape.area_ratio);
       if (shape.volume_change) std::printf(", volume %+.3g %%", 100 * *shape.volume_change);
       std::printf("\n");
     }

@@ -10,6 +10,7 @@
 #include "apps/msdeform/commands.h"
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/mesh_io.h"
 
 namespace msd::cli {
@@ -277,8 +278,10 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
     // A rotation or scale is about the point of the --about right after it, else the handle's centroid.
     bool has_about = false;
     Vec3 about = Vec3::Zero();
+    std::string step = option;  // the step, as given
     if (s.option != translate_ && i + 1 < all.size() && all[i + 1].option == about_) {
       const Step& next = all[++i];
+      step += " --about " + next.value;
       has_about = next.value != "handle-centroid";
       if (has_about) about = vec(numbers("--about " + next.value, next.value, {3}, "X,Y,Z or handle-centroid"));
     }
@@ -288,6 +291,13 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
       Mat4 about_c = M;  // M about c: x ↦ c + A (x − c) + t
       about_c.topRightCorner<3, 1>() += c - M.topLeftCorner<3, 3>() * c;
       T[k] = about_c * T[k];
+      // Each step, not only the product, stays within msdeform's sizes: --scale 1e200 --scale 1e-200 gave
+      // back a product near the identity that had lost the handle's centre to rounding (it moved the handle
+      // by minus its centroid).
+      if (!(T[k].cwiseAbs().maxCoeff() < kMaxExtent))
+        throw InvalidInput(step + ": handle " + std::to_string(k) + "'s transform reaches an entry of " +
+                           format_number(T[k].cwiseAbs().maxCoeff()) +
+                           " at this step; msdeform works with sizes up to 1e70, in every step of a composition");
     }
   }
   return T;

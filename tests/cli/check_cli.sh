@@ -68,6 +68,9 @@ expect_error 1 "none of --methods shell, arap has a base to decompose" \
   "$msdeform" compare --scenes lift --methods shell,arap --detail-scale 0.3 -o cmp-unread
 grep -q "building scene" err.txt && fail "compare built scenes before refusing an unread option"
 # Each method's own settings are refused with a method that does not read them, by either command.
+# Scales that cancel in the product lost the handle's centre to rounding, and moved it by minus its centroid.
+expect_error 1 "--scale 1e200: handle 0's transform reaches an entry of 1e+200 at this step" \
+  "$msdeform" deform lift.off --fixed halfspace:1,0,0,0.2 --handle halfspace:-1,0,0,-0.8 --scale 1e200 --scale 1e-200 --method shell -o x.off
 expect_error 1 "--kb applies to --method shell (or multiscale with such a --base-method), not --method arap" \
   "$msdeform" deform --scene lift --method arap --kb 5 -o x.off
 expect_error 1 "--blend applies to --method propagate (or multiscale with such a --base-method), not --method multiscale-normal" \

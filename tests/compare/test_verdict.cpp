@@ -102,7 +102,12 @@ TEST_CASE("verdicts: a result whose self-intersections were not counted is not c
   CHECK_THAT(a[0].reason, Contains("the most rigid result") && Contains("self-intersections not counted"));
   CHECK_THAT(a[0].reason, !Contains("unbroken"));
   CHECK(a[1].verdict == Verdict::Fair);
-  CHECK_THAT(verdict_summary(results, a), !Contains("the most rigid unbroken"));
+  CHECK_THAT(a[1].reason, Contains("rigidity 3× the edit's most rigid result") && !Contains("unbroken"));
+  CHECK_THAT(verdict_summary(results, a), !Contains("unbroken"));
+  // Compared with a result that was counted, the reference is unbroken.
+  results[0].self_intersections = 0;
+  const std::vector<Assessment> b = assess(results);
+  CHECK_THAT(b[1].reason, Contains("rigidity 3× the edit's most rigid unbroken result"));
 }
 
 TEST_CASE("verdicts: the summary gives the best's verdict, and says when an edit has no usable result",

@@ -292,13 +292,12 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   // constrained vertices' normal-displacement reconstruction. normal_ reconstructs only those (every other
   // vertex is placed by the solve or by the caller), with B' normals only where they read them.
   {
-    std::vector<char> reconstructed(ns);
-    for (long v = 0; v < ns; ++v) reconstructed[v] = !placed[v];
-    for (int v : system_.unknown()) reconstructed[v] = 0;
-    std::vector<int> not_reconstructed;
+    std::vector<char> left = placed;  // by the caller, then by the solve
+    for (int v : system_.unknown()) left[v] = 1;
+    std::vector<int> left_vertices;
     for (long v = 0; v < ns; ++v)
-      if (!reconstructed[v]) not_reconstructed.push_back(static_cast<int>(v));
-    normal_.set_placed_vertices(std::move(not_reconstructed));
+      if (left[v]) left_vertices.push_back(static_cast<int>(v));
+    normal_.set_placed_vertices(std::move(left_vertices));
   }
   normal_.encode(S, Fs, B, Fb);
 

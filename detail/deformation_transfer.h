@@ -49,10 +49,10 @@ namespace msd {
 //! Dirichlet constraints: the anchor vertices (set_anchor_vertices, e.g. the multi-scale deformer's fixed
 //! and handle vertices). Those the caller places (set_placed_vertices: the multi-scale deformer puts them
 //! at T_k p before reconstruct()) keep the rows it wrote, so the solve ends at the positions returned
-//! there (a placed vertex that is not an anchor is held there too); the others are placed at their normal-displacement reconstruction b'_i + h_i n'_i on B' (= B'
-//! exactly where S = B). A connected component of S without an anchor — e.g. all of S when no anchors are
-//! given — has its lowest-indexed vertex pinned the same way, so the system is positive definite
-//! (report().pinned_vertices). The reconstructed values come from normal_displacements(), encoded to
+//! there (a placed vertex that is not an anchor is held there too); the others are placed at their
+//! normal-displacement reconstruction b'_i + h_i n'_i on B' (= B' exactly where S = B). A connected
+//! component of S without an anchor — e.g. all of S when no anchors are given — has its lowest-indexed
+//! vertex pinned the same way, so the system is positive definite (report().pinned_vertices). The reconstructed values come from normal_displacements(), encoded to
 //! reconstruct only those constrained vertices (its placed vertices are the others), with B' normals only
 //! where they read them.
 //!

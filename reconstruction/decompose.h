@@ -31,6 +31,11 @@ enum class DecompositionKind {
 const char* to_string(DecompositionKind kind);
 //! \throw InvalidInput for an unknown name, listing the known ones.
 DecompositionKind decomposition_kind(const std::string& name);
+//! Whether a base of this kind reads the low-pass detail scale (DecompositionOptions::low_pass): the
+//! low-pass base and the remeshed one (a low-pass base remeshed), not the fairing or subdivision base.
+inline bool reads_detail_scale(DecompositionKind kind) {
+  return kind == DecompositionKind::LowPass || kind == DecompositionKind::Remeshed;
+}
 
 struct DecompositionOptions {
   DecompositionKind kind = DecompositionKind::LowPass;

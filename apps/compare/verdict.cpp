@@ -77,7 +77,7 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         best_rigidity = results[i].rigidity.mean;
         best_counted = results[i].self_intersections >= 0;
       }
-    const std::string most_rigid = best_counted ? "the most rigid unbroken result" : "the most rigid result";
+    const std::string most_rigid = best_counted ? "most rigid unbroken result" : "most rigid result";
     for (size_t i : ids) {
       const MethodResult& r = results[i];
       Assessment& a = out[i];
@@ -104,13 +104,13 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         const std::string times = fmt(ratio < 10 ? "%.2g" : "%.0f", ratio);
         // Relative to the unbroken results only: a broken one may well be more rigid (ARAP through itself).
         const std::string text =
-            "rigidity " + times + "× the edit's " + most_rigid.substr(4) + " (the shape shears or stretches)";
+            "rigidity " + times + "× the edit's " + most_rigid + " (the shape shears or stretches)";
         if (ratio > t.poor_rigidity) poor.push_back(text);
         else if (ratio > t.fair_rigidity) fair.push_back(text);
         else
           good.push_back(r.rigidity.mean <= t.rigid_floor ? "rigid (rigidity error " + fmt("%.2g", r.rigidity.mean) + ")"
-                         : ratio <= 1 ? (intersections_counted ? most_rigid : "the most rigid result")
-                                  : "rigid (" + fmt("%.2g", ratio) + "× " + most_rigid + ")");
+                         : ratio <= 1 ? "the " + (intersections_counted ? most_rigid : "most rigid result")
+                                  : "rigid (" + fmt("%.2g", ratio) + "× the " + most_rigid + ")");
       }
       if (r.distortion.count > 0) {
         const double d = r.distortion.mean;

@@ -81,8 +81,7 @@ DecompositionOptions DecompositionArgs::resolve(const EditCase& edit) const {
   // Options of another base would be ignored.
   if (fairing_option && fairing_option->count() > 0 && o.kind != DecompositionKind::Fairing)
     throw InvalidInput(std::string("--fairing applies to --base fairing, not --base ") + to_string(o.kind));
-  if (scale_option && scale_option->count() > 0 && o.kind != DecompositionKind::LowPass &&
-      o.kind != DecompositionKind::Remeshed)
+  if (scale_option && scale_option->count() > 0 && !reads_detail_scale(o.kind))
     throw InvalidInput(std::string("--detail-scale applies to --base low-pass or remeshed, not --base ") +
                        to_string(o.kind));
   if (o.kind == DecompositionKind::Subdivision) {

@@ -122,13 +122,6 @@ Option none_when(Option o, Unused unused) {
   return o;
 }
 
-// The low-pass base's detail scale is read by the low-pass and remeshed bases (as the command line's
-// --detail-scale), not by the fairing or subdivision ones.
-bool reads_detail_scale(const MethodSettings& s) {
-  return s.decomposition.kind != msd::DecompositionKind::Fairing &&
-         s.decomposition.kind != msd::DecompositionKind::Subdivision;
-}
-
 template <class Enum>
 using Choices = std::vector<std::pair<std::string, Enum>>;
 
@@ -395,7 +388,9 @@ const std::vector<Option>& options_table() {
                                       [](auto& s, const std::string&) -> auto& {
                                         return s.decomposition.low_pass.detail_scale;
                                       }),
-                          [](const MethodSettings& s, const std::string&) { return !reads_detail_scale(s); }));
+                          [](const MethodSettings& s, const std::string&) {
+                            return !msd::reads_detail_scale(s.decomposition.kind);
+                          }));
     {
       Option o{"fairing", {"multiscale"},
                "base='fairing': the order of the fairing, 1 | 2 | 3 or 'membrane' | 'thin-plate' | 'minimum-variation'",
@@ -628,7 +623,7 @@ PyDeformer::PyDeformer(const std::string& name, const py::kwargs& options) : met
   if (was_given("fairing") && settings.decomposition.kind != msd::DecompositionKind::Fairing)
     throw py::value_error("Deformer('" + method + "'): fairing applies to base='fairing', not base='" +
                           msd::to_string(settings.decomposition.kind) + "'");
-  if (was_given("detail_scale") && !reads_detail_scale(settings))
+  if (was_given("detail_scale") && !msd::reads_detail_scale(settings.decomposition.kind))
     throw py::value_error("Deformer('" + method + "'): detail_scale applies to the low-pass and remeshed bases, not "
                           "base='" + msd::to_string(settings.decomposition.kind) + "'");
   if (was_given("geodesic_time_factor") && settings.propagation.field != msd::PropagationField::Geodesic)

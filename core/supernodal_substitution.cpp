@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdint>
+#include <limits>
 
 #include <cholmod.h>
 #include <tbb/parallel_invoke.h>
@@ -120,6 +122,37 @@ MSD_VECTOR_CLONES void back(const Supernode& S, Row* __restrict Y, Row* __restri
 
 Row* rows(std::vector<double>& v) { return reinterpret_cast<Row*>(v.data()); }
 
+// Streams the factor's values into the cache a fixed distance ahead of the supernodes a thread solves. A
+// thread walks its supernodes' values in address order (ascending forward, descending back), but each
+// column is first touched at a stride of its leading dimension and the supernodes are short, so the
+// hardware prefetcher does not keep up: without this, a 1M lift solve waited on memory for a quarter of
+// its time (3 columns, 630k unknowns: 45.6 → 34 ms, cache flushed between solves; 100k: 3.2 → 2.35 ms).
+class StreamPrefetch {
+ public:
+  explicit StreamPrefetch(bool ascending)
+      : ascending_(ascending), next_(ascending ? 0 : std::numeric_limits<std::uintptr_t>::max()) {}
+  // Prefetches what lies kDistance bytes beyond S's values in the walking direction and was not yet
+  // (addresses as integers: the distance may run past the factor's array, which a prefetch tolerates).
+  void before(const Supernode& S) {
+    const auto begin = reinterpret_cast<std::uintptr_t>(S.x);
+    const auto end = reinterpret_cast<std::uintptr_t>(S.x + S.ncol * (S.ncol + S.m));
+    if (ascending_) {
+      std::uintptr_t p = std::max(next_, begin) + kDistance;
+      for (; p < end + kDistance; p += kLine) __builtin_prefetch(reinterpret_cast<const void*>(p));
+      next_ = p - kDistance;
+    } else {
+      std::uintptr_t p = std::min(next_, end) - kDistance;
+      for (; p > begin - kDistance; p -= kLine) __builtin_prefetch(reinterpret_cast<const void*>(p - kLine));
+      next_ = p + kDistance;
+    }
+  }
+
+ private:
+  static constexpr std::uintptr_t kDistance = 4096, kLine = 64;  // 2, 4 and 8 KB measured alike
+  const bool ascending_;
+  std::uintptr_t next_;
+};
+
 }  // namespace
 
 void SupernodalSubstitution::clear() {
@@ -233,7 +266,12 @@ void SupernodalSubstitution::solve(const double* B, double* X, int k) const {
   // Forward: the two groups in parallel, their updates to top rows collected apart, then the top.
   auto forward_group = [&](int g) {
     std::fill(top_update_[g].begin(), top_update_[g].end(), 0.0);
-    for (long s : group_[g]) forward(Supernode(L, s), Y, rows(w_[g]), top_slot_.data(), rows(top_update_[g]));
+    StreamPrefetch prefetch(true);
+    for (long s : group_[g]) {
+      const Supernode S(L, s);
+      prefetch.before(S);
+      forward(S, Y, rows(w_[g]), top_slot_.data(), rows(top_update_[g]));
+    }
   };
   tbb::parallel_invoke([&] { forward_group(0); }, [&] { forward_group(1); });
   for (long s : top_) {
@@ -243,12 +281,23 @@ void SupernodalSubstitution::solve(const double* B, double* X, int k) const {
       Y[j] -= rows(top_update_[0])[t] + rows(top_update_[1])[t];
     }
   }
-  for (long s : top_) forward(Supernode(L, s), Y, rows(w_[2]), nullptr, nullptr);
+  StreamPrefetch top_forward(true);
+  for (long s : top_) {
+    const Supernode S(L, s);
+    top_forward.before(S);
+    forward(S, Y, rows(w_[2]), nullptr, nullptr);
+  }
   // Back: the top first, then the two groups in parallel (each reads the top and writes only its rows).
-  for (auto s = top_.rbegin(); s != top_.rend(); ++s) back(Supernode(L, *s), Y, rows(w_[2]));
-  auto back_group = [&](int g) {
-    for (auto s = group_[g].rbegin(); s != group_[g].rend(); ++s) back(Supernode(L, *s), Y, rows(w_[g]));
+  auto back_through = [&](const std::vector<long>& supernodes, Row* W) {
+    StreamPrefetch prefetch(false);
+    for (auto s = supernodes.rbegin(); s != supernodes.rend(); ++s) {
+      const Supernode S(L, *s);
+      prefetch.before(S);
+      back(S, Y, W);
+    }
   };
+  back_through(top_, rows(w_[2]));
+  auto back_group = [&](int g) { back_through(group_[g], rows(w_[g])); };
   tbb::parallel_invoke([&] { back_group(0); }, [&] { back_group(1); });
   parallel_for_chunks(n, [&](long begin, long end) {  // X = P Y
     for (long i = begin; i < end; ++i)

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <numeric>
 #include <utility>
 
 #include "msdeform/core/blas_kernels.h"
@@ -22,6 +23,18 @@ namespace {
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+void identity_ordering(std::vector<int>& ordering, int n) {
+  ordering.resize(n);
+  std::iota(ordering.begin(), ordering.end(), 0);
+}
+// solve_ordered() where the rows are not permuted: Y (n rows of 4) through a column-major solve.
+template <class Impl>
+void solve_rows(const Impl& impl, double* Y, int k, int n) {
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>> rows(Y, n, 4);
+  Eigen::MatrixXd X, B = rows.leftCols(k);
+  impl.solve(B, X);
+  rows.leftCols(k) = X;
+}
 }  // namespace
 
 #ifdef MSD_HAVE_CHOLMOD
@@ -32,6 +45,7 @@ struct SparseSPDSolver::Impl {
   cholmod_factor* L = nullptr;
   mutable cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve workspace, reused
   SupernodalSubstitution substitution;  // solves up to 4 right-hand sides, on both cores
+  std::vector<int> ordering;            // solve_ordered()'s row order
   int n = 0;
   double analyse_seconds = 0, numeric_seconds = 0;
 
@@ -53,6 +67,7 @@ struct SparseSPDSolver::Impl {
   }
   void release() {
     substitution.clear();
+    ordering.clear();
     if (L) cholmod_l_free_factor(&L, &common);
     for (cholmod_dense** d : {&X, &Y, &E})
       if (*d) cholmod_l_free_dense(d, &common);
@@ -111,7 +126,15 @@ struct SparseSPDSolver::Impl {
                                                         : "SparseSPDSolver: factorisation failed (CHOLMOD status " +
                                                               std::to_string(status) + ")");
     }
-    if (!substitution.planned()) substitution.plan(L);  // a refactorisation keeps the structure
+    if (!substitution.planned() && substitution.plan(L)) {  // a refactorisation keeps the structure
+      const long* perm = substitution.ordering();
+      ordering.assign(perm, perm + n);
+    }
+    if (ordering.empty()) identity_ordering(ordering, n);
+  }
+  void solve_ordered(double* Y, int k) const {
+    if (substitution.planned()) return substitution.solve_ordered(Y, k);
+    solve_rows(*this, Y, k, n);
   }
   void solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& Xout) const {
     if (substitution.planned() && B.cols() >= 1 && B.cols() <= SupernodalSubstitution::kMaxColumns) {
@@ -190,10 +213,16 @@ struct SparseSPDSolver::Impl {
         throw SolverError("SparseSPDSolver: matrix is not positive definite (failed at column " + std::to_string(orig) + ")", orig);
       }
     ok = true;
+    identity_ordering(ordering, n);
   }
   void solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X) const { X = ldlt.solve(B); }
+  std::vector<int> ordering;  // solve_ordered() takes the rows as they are
+  void solve_ordered(double* Y, int k) const { solve_rows(*this, Y, k, n); }
   double factor_nonzeros() const { return ok ? static_cast<double>(ldlt.matrixL().nestedExpression().nonZeros()) + n : 0; }
-  void release() { ok = false; }
+  void release() {
+    ok = false;
+    ordering.clear();
+  }
 };
 
 std::string SparseSPDSolver::backend() { return "Eigen SimplicialLDLT"; }
@@ -244,6 +273,15 @@ void SparseSPDSolver::solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X) const 
                      std::to_string(impl_->n));
   impl_->solve(B, X);
 }
+
+void SparseSPDSolver::solve_ordered(double* Y, int k) const {
+  if (!factored()) throw UsageError("SparseSPDSolver::solve_ordered: call factor() first");
+  if (k < 1 || k > 4)
+    throw UsageError("SparseSPDSolver::solve_ordered: " + std::to_string(k) + " right-hand sides, 1 to 4 allowed");
+  impl_->solve_ordered(Y, k);
+}
+
+const std::vector<int>& SparseSPDSolver::ordering() const { return impl_->ordering; }
 
 Eigen::MatrixXd SparseSPDSolver::solve(const Eigen::MatrixXd& B) const {
   Eigen::MatrixXd X;

@@ -251,10 +251,14 @@ bool SupernodalSubstitution::plan(const cholmod_factor_struct* factor) {
   return true;
 }
 
+const long* SupernodalSubstitution::ordering() const {
+  static_assert(sizeof(Int) == sizeof(long), "CHOLMOD's long indices are long");
+  return reinterpret_cast<const long*>(L_->Perm);
+}
+
 void SupernodalSubstitution::solve(const double* B, double* X, int k) const {
-  const cholmod_factor* L = L_;
-  const long n = static_cast<long>(L->n);
-  const auto* perm = static_cast<const Int*>(L->Perm);
+  const long n = static_cast<long>(L_->n);
+  const long* perm = ordering();
   Row* Y = rows(y_);
   parallel_for_chunks(n, [&](long begin, long end) {  // Y = Pᵀ B, four to a row
     for (long i = begin; i < end; ++i) {
@@ -263,15 +267,28 @@ void SupernodalSubstitution::solve(const double* B, double* X, int k) const {
       Y[i] = r;
     }
   });
+  solve_ordered(y_.data(), k);
+  parallel_for_chunks(n, [&](long begin, long end) {  // X = P Y
+    for (long i = begin; i < end; ++i)
+      for (int c = 0; c < k; ++c) X[perm[i] + c * n] = Y[i][c];
+  });
+}
+
+void SupernodalSubstitution::solve_ordered(double* Y4, int) const {
+  const cholmod_factor* L = L_;
+  Row* Y = reinterpret_cast<Row*>(Y4);
+  auto forward_through = [&](const std::vector<long>& supernodes, Row* W, const int* top_slot, Row* top_update) {
+    StreamPrefetch prefetch(true);
+    for (long s : supernodes) {
+      const Supernode S(L, s);
+      prefetch.before(S);
+      forward(S, Y, W, top_slot, top_update);
+    }
+  };
   // Forward: the two groups in parallel, their updates to top rows collected apart, then the top.
   auto forward_group = [&](int g) {
     std::fill(top_update_[g].begin(), top_update_[g].end(), 0.0);
-    StreamPrefetch prefetch(true);
-    for (long s : group_[g]) {
-      const Supernode S(L, s);
-      prefetch.before(S);
-      forward(S, Y, rows(w_[g]), top_slot_.data(), rows(top_update_[g]));
-    }
+    forward_through(group_[g], rows(w_[g]), top_slot_.data(), rows(top_update_[g]));
   };
   tbb::parallel_invoke([&] { forward_group(0); }, [&] { forward_group(1); });
   for (long s : top_) {
@@ -281,12 +298,7 @@ void SupernodalSubstitution::solve(const double* B, double* X, int k) const {
       Y[j] -= rows(top_update_[0])[t] + rows(top_update_[1])[t];
     }
   }
-  StreamPrefetch top_forward(true);
-  for (long s : top_) {
-    const Supernode S(L, s);
-    top_forward.before(S);
-    forward(S, Y, rows(w_[2]), nullptr, nullptr);
-  }
+  forward_through(top_, rows(w_[2]), nullptr, nullptr);
   // Back: the top first, then the two groups in parallel (each reads the top and writes only its rows).
   auto back_through = [&](const std::vector<long>& supernodes, Row* W) {
     StreamPrefetch prefetch(false);
@@ -299,10 +311,6 @@ void SupernodalSubstitution::solve(const double* B, double* X, int k) const {
   back_through(top_, rows(w_[2]));
   auto back_group = [&](int g) { back_through(group_[g], rows(w_[g])); };
   tbb::parallel_invoke([&] { back_group(0); }, [&] { back_group(1); });
-  parallel_for_chunks(n, [&](long begin, long end) {  // X = P Y
-    for (long i = begin; i < end; ++i)
-      for (int c = 0; c < k; ++c) X[perm[i] + c * n] = Y[i][c];
-  });
 }
 
 }  // namespace msd

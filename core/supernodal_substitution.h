@@ -33,6 +33,13 @@ class SupernodalSubstitution {
   //! be B (all of B is read before X is written). Allocates nothing; not safe to call concurrently on one
   //! object.
   void solve(const double* B, double* X, int k) const;
+  //! The same without the permutations: Y holds n rows of 4 doubles, row i the right-hand sides of row
+  //! ordering()[i] of A in its first k entries (the others are ignored), and is overwritten with X's rows
+  //! in the same order. For frame loops that assemble B and read X row by row in that order.
+  void solve_ordered(double* Y, int k) const;
+  //! The factor's fill-reducing ordering (CHOLMOD's Perm, n entries): row i of the factored system is
+  //! row ordering()[i] of A.
+  const long* ordering() const;
 
   //! Share of the factor's entries in the two parallel subtrees (the rest is solved on one thread).
   double parallel_share() const { return parallel_share_; }

@@ -9,6 +9,7 @@
 #include <mutex>
 #include <numeric>
 #include <string>
+#include <utility>
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
@@ -286,7 +287,21 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   frame_inverse = FaceMatrices();
   face_q = FaceMatrices();
 
-  system_.prepare(Q, known);
+  system_.prepare(std::move(Q), known);
+
+  // Where each row of the reduced system sits in its solver's order (SparseSPDSolver::solve_ordered()): a
+  // frame writes row r of the right-hand side straight there and reads S' from there, in the mesh's order
+  // (no permutation passes). The coupling Q(unknown, known) by row, for the right-hand side's pass.
+  {
+    const std::vector<int>& order = system_.solver().ordering();
+    solve_row_.resize(order.size());
+    for (size_t i = 0; i < order.size(); ++i) solve_row_[order[i]] = static_cast<int>(i);
+    using RowMajorSparse = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+    const RowMajorSparse coupling = system_.coupling();
+    coupling_offsets_.assign(coupling.outerIndexPtr(), coupling.outerIndexPtr() + coupling.rows() + 1);
+    coupling_known_.assign(coupling.innerIndexPtr(), coupling.innerIndexPtr() + coupling.nonZeros());
+    coupling_weight_.assign(coupling.valuePtr(), coupling.valuePtr() + coupling.nonZeros());
+  }
 
   // The Dirichlet values: the rows the caller places (placed_vertices()) as it wrote them, the other
   // constrained vertices' normal-displacement reconstruction. normal_ reconstructs only those (every other
@@ -302,7 +317,7 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   normal_.encode(S, Fs, B, Fb);
 
   frame_.setZero(static_cast<long>(slot_faces_.size()), 9);
-  rhs_.resize(system_.unknown().size(), 3);
+  ordered_.setZero(static_cast<long>(solve_row_.size()), 4);
   known_values_.resize(known.size(), 3);
   Box rest;
   rest.add(S);
@@ -338,10 +353,27 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
     }
   });
 
+  // Dirichlet values: the placed rows as the caller wrote them, the normal-displacement reconstruction
+  // b' + h n' of the other constrained vertices written into their rows of out.
+  size_output(out, num_vertices_, where);
+  normal_.reconstruct(B_deformed, out);
+  const std::vector<int>& known = system_.known();
+  parallel_for_chunks(static_cast<long>(known.size()), [&](long begin, long end) {
+    for (long k = begin; k < end; ++k) known_values_.row(k) = out.row(known[k]);
+  });
+  // Solve for x − c with c the first Dirichlet value: Q's rows sum to zero, so the shift changes only the
+  // known values, and the solve's rounding is relative to the size of S' rather than to its distance from
+  // the origin.
+  const Eigen::RowVector3d centre =
+      known_values_.rows() > 0 ? Eigen::RowVector3d(known_values_.row(0)) : Eigen::RowVector3d::Zero();
+  known_values_.rowwise() -= centre;
+
   // Reduced right-hand side Q_uu x_u = f_u − Q_uk x_k, f_i = Σ G_t (Q_t S)_k = Σ V'_t u_k over the corners
-  // at vertex i.
+  // at vertex i, each row written where the solver takes it.
   const std::vector<int>& unknown = system_.unknown();
-  parallel_for_chunks(static_cast<long>(unknown.size()), [&](long begin, long end) {
+  const long nu = static_cast<long>(unknown.size());
+  const double *kx = known_values_.data(), *ky = kx + known_values_.rows(), *kz = ky + known_values_.rows();
+  parallel_for_chunks(nu, [&](long begin, long end) {
     for (long r = begin; r < end; ++r) {
       // Scalar sums in registers: Eigen's 3×3 product kept the sum on the stack and stalled on reloading it.
       double x = 0, y = 0, z = 0;
@@ -357,39 +389,27 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
           x += u[0], y += u[1], z += u[2];
         }
       }
-      rhs_(r, 0) = x, rhs_(r, 1) = y, rhs_(r, 2) = z;
+      for (int c = coupling_offsets_[r]; c < coupling_offsets_[r + 1]; ++c) {
+        const int k = coupling_known_[c];
+        const double w = coupling_weight_[c];
+        x -= w * kx[k], y -= w * ky[k], z -= w * kz[k];
+      }
+      double* row = ordered_.row(solve_row_[r]).data();
+      row[0] = x, row[1] = y, row[2] = z;
     }
   });
-
-  // Dirichlet values: the placed rows as the caller wrote them, the normal-displacement reconstruction
-  // b' + h n' of the other constrained vertices written into their rows of out.
-  size_output(out, num_vertices_, where);
-  normal_.reconstruct(B_deformed, out);
-  const std::vector<int>& known = system_.known();
-  parallel_for_chunks(static_cast<long>(known.size()), [&](long begin, long end) {
-    for (long k = begin; k < end; ++k) known_values_.row(k) = out.row(known[k]);
-  });
-
-  // Solve for x − c with c the first Dirichlet value: Q's rows sum to zero, so the shift changes only the
-  // known values, and the solve's rounding is relative to the size of S' rather than to its distance from
-  // the origin.
-  const Eigen::RowVector3d centre =
-      known_values_.rows() > 0 ? Eigen::RowVector3d(known_values_.row(0)) : Eigen::RowVector3d::Zero();
-  known_values_.rowwise() -= centre;
-  if (!unknown.empty()) {
-    rhs_.noalias() -= system_.coupling() * known_values_;
-    system_.solver().solve(rhs_, solution_);
-  }
+  if (nu > 0) system_.solver().solve_ordered(ordered_.data(), 3);
   // S' of the unknown vertices, each row tested against check_result()'s bound as it is written (the
   // Dirichlet rows are finite, and in the box by construction): only when one fails (beyond the bound or
   // not finite) does check_result() read all of S' to measure it and name the worst vertex.
   box.add(known_values_, centre);
   const double limit = box.result_limit(rest_extent_), limit2 = limit * limit;
   std::atomic<bool> near{true};
-  parallel_for_chunks(static_cast<long>(unknown.size()), [&](long begin, long end) {
+  parallel_for_chunks(nu, [&](long begin, long end) {
     bool chunk_near = true;
     for (long r = begin; r < end; ++r) {
-      const Vec3 p = (solution_.row(r) + centre).transpose();
+      const double* row = ordered_.row(solve_row_[r]).data();
+      const Vec3 p(row[0] + centre[0], row[1] + centre[1], row[2] + centre[2]);
       out.row(unknown[r]) = p;
       chunk_near &= box.near(p, limit2);
     }

@@ -130,13 +130,20 @@ class DeformationTransfer : public DetailEncoding {
   // of the source face s of the corner's triangle t (−1: none), and corner_u_ row c = V_s⁻¹ q_{t,k} (q_{t,k}
   // itself where s = −1).
   std::vector<int> corner_offsets_, corner_source_;
+  // Row r of the reduced system is row solve_row_[r] of its solver's order (SparseSPDSolver::ordering()).
+  std::vector<int> solve_row_;
+  // Q(unknown, known) by row r (CSR): coupling_known_ indexes system_.known().
+  std::vector<int> coupling_offsets_, coupling_known_;
+  std::vector<double> coupling_weight_;
   Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> corner_u_;
   ConstrainedQuadratic system_;
   double rest_extent_ = 0;  // diagonal of the bounding box of S ∪ B (the result check's detail allowance)
   Report report_;
   // Per-frame buffers.
   Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> frame_;  // V' per frame slot (row-major 3×3)
-  Eigen::MatrixXd rhs_, known_values_, solution_;  // reduced system: rows of system_.unknown()
+  Eigen::MatrixXd known_values_;  // rows of system_.known()
+  // The right-hand sides, then the solution, of the reduced system in its solver's order (4 per row).
+  Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> ordered_;
 };
 
 }  // namespace msd

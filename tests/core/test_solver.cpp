@@ -1,8 +1,10 @@
 #include <catch2/catch.hpp>
 #include <strings.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -118,6 +120,37 @@ TEST_CASE("SparseSPDSolver: 1 to 4 right-hand sides equal the same columns solve
   SparseSPDSolver single;
   single.factor(one);
   CHECK((single.solve(Eigen::MatrixXd::Constant(1, 2, 2.0)).array() == 0.5).all());
+}
+
+TEST_CASE("SparseSPDSolver::solve_ordered equals solve() in the factor's row order, 1 to 4 columns",
+          "[core][solver]") {
+  const SparseMatrix A = grid_laplacian(120);
+  SparseSPDSolver solver;
+  REQUIRE(solver.ordering().empty());
+  double unused[4] = {0, 0, 0, 0};
+  CHECK_THROWS_AS(solver.solve_ordered(unused, 3), UsageError);
+  solver.factor(A);
+  const long n = A.rows();
+  // ordering() is a permutation of the rows.
+  std::vector<int> order = solver.ordering();
+  REQUIRE(static_cast<long>(order.size()) == n);
+  std::sort(order.begin(), order.end());
+  for (long i = 0; i < n; ++i) REQUIRE(order[i] == i);
+  const std::vector<int>& ordering = solver.ordering();
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(n, 4);
+  for (int k = 1; k <= 4; ++k) {
+    INFO(k << " columns");
+    const Eigen::MatrixXd X = solver.solve(B.leftCols(k));
+    // Rows in the factor's order; the columns beyond k hold values the solve must ignore.
+    Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> Y(n, 4);
+    for (long i = 0; i < n; ++i) Y.row(i) = B.row(ordering[i]);
+    solver.solve_ordered(Y.data(), k);
+    double diff = 0;
+    for (long i = 0; i < n; ++i) diff = std::max(diff, (Y.row(i).head(k) - X.row(ordering[i])).cwiseAbs().maxCoeff());
+    CHECK(diff <= 1e-14 * X.cwiseAbs().maxCoeff());
+  }
+  CHECK_THROWS_AS(solver.solve_ordered(unused, 0), UsageError);
+  CHECK_THROWS_AS(solver.solve_ordered(unused, 5), UsageError);
 }
 
 #ifdef MSD_HAVE_CHOLMOD

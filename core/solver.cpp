@@ -12,6 +12,10 @@
 
 #ifdef MSD_HAVE_CHOLMOD
 #include <cholmod.h>
+#include <sys/mman.h>
+
+#include <cstdlib>
+#include <mutex>
 
 #include "msdeform/core/supernodal_substitution.h"
 #else
@@ -39,6 +43,31 @@ void solve_rows(const Impl& impl, double* Y, int k, int n) {
 
 #ifdef MSD_HAVE_CHOLMOD
 
+namespace {
+// CHOLMOD's large blocks (the factor's values: 1 GB for the 1M lift's bi-Laplacian) on transparent huge
+// pages where the kernel gives them on request (Debian's default THP mode is madvise). The numeric
+// factorisation first zeroes its factor, and on 4 KB pages a sixth of its time went to page faults (1M
+// bi-Laplacian 8.5 → 7.1 s). Smaller blocks, and systems without the hint, take plain malloc.
+void* factor_malloc(size_t size) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  constexpr size_t kHugePage = size_t{2} << 20;
+  if (size >= 64 * kHugePage) {
+    void* p = std::aligned_alloc(kHugePage, (size + kHugePage - 1) / kHugePage * kHugePage);
+    if (p) madvise(p, size, MADV_HUGEPAGE);  // a hint: the block is usable whatever it answers
+    return p;
+  }
+#endif
+  return std::malloc(size);
+}
+// Installs factor_malloc, once per process, unless the program gave SuiteSparse its own allocator.
+void use_factor_malloc() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (SuiteSparse_config.malloc_func == &std::malloc) SuiteSparse_config.malloc_func = &factor_malloc;
+  });
+}
+}  // namespace
+
 // CHOLMOD with 64-bit indices (a 1M-vertex bi-Laplacian factor approaches 2^31 entries).
 struct SparseSPDSolver::Impl {
   cholmod_common common;
@@ -50,6 +79,7 @@ struct SparseSPDSolver::Impl {
   double analyse_seconds = 0, numeric_seconds = 0;
 
   Impl() {
+    use_factor_malloc();
     cholmod_l_start(&common);
     common.supernodal = CHOLMOD_SUPERNODAL;
     common.print = 0;

@@ -215,11 +215,13 @@ std::string SparseSPDSolver::backend() {
 
 struct SparseSPDSolver::Impl {
   Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower> ldlt;
+  std::vector<int> ordering;  // solve_ordered() takes the rows as they are
   bool ok = false;
   int n = 0;
   double analyse_seconds = 0, numeric_seconds = 0;
   void factor(const SparseMatrix& A, SparseMatrix* owned = nullptr) {
     ok = false;
+    ordering.clear();
     n = static_cast<int>(A.rows());
     const auto t0 = std::chrono::steady_clock::now();
     ldlt.analyzePattern(A);
@@ -247,7 +249,6 @@ struct SparseSPDSolver::Impl {
     identity_ordering(ordering, n);
   }
   void solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X) const { X = ldlt.solve(B); }
-  std::vector<int> ordering;  // solve_ordered() takes the rows as they are
   void solve_ordered(double* Y, int k) const { solve_rows(*this, Y, k, n); }
   double factor_nonzeros() const { return ok ? static_cast<double>(ldlt.matrixL().nestedExpression().nonZeros()) + n : 0; }
   void release() {
@@ -312,7 +313,10 @@ void SparseSPDSolver::solve_ordered(double* Y, int k) const {
   impl_->solve_ordered(Y, k);
 }
 
-const std::vector<int>& SparseSPDSolver::ordering() const { return impl_->ordering; }
+const std::vector<int>& SparseSPDSolver::ordering() const {
+  static const std::vector<int> none;  // a moved-from solver
+  return impl_ ? impl_->ordering : none;
+}
 
 Eigen::MatrixXd SparseSPDSolver::solve(const Eigen::MatrixXd& B) const {
   Eigen::MatrixXd X;

@@ -113,6 +113,7 @@ struct HeatGeodesics::Impl {
     try {
       heat.factor(A);
     } catch (const SolverError& e) {
+      if (e.index() < 0) throw SolverError(std::string("HeatGeodesics: ") + e.what());  // not singular: e.g. out of memory
       // M > 0 and −W >= 0, so this is a numerical breakdown (e.g. coordinates of wildly different scales).
       throw SolverError("HeatGeodesics: factoring the heat operator M - tW failed near vertex " +
                             std::to_string(e.index()) + "; try a larger time factor (--geodesic-time-factor, Python geodesic_time_factor)",
@@ -180,6 +181,7 @@ struct HeatGeodesics::Impl {
     try {
       poisson.prepare(-W, known);
     } catch (const SolverError& e) {
+      if (e.index() < 0) throw SolverError(std::string("HeatGeodesics: ") + e.what());  // not singular: e.g. out of memory
       throw SolverError("HeatGeodesics: the Poisson system is singular at vertex " + std::to_string(e.index()) +
                             " (its edges all have zero cotan weight, e.g. its faces are degenerate)",
                         e.index());

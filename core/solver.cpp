@@ -14,6 +14,7 @@
 #include <cholmod.h>
 #include <sys/mman.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <mutex>
 
@@ -52,7 +53,7 @@ namespace {
 void* factor_malloc(size_t size) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
   constexpr size_t kHugePage = size_t{2} << 20;
-  if (size >= 64 * kHugePage) {
+  if (size >= 64 * kHugePage && size <= SIZE_MAX - kHugePage) {  // larger: malloc refuses it
     void* p = std::aligned_alloc(kHugePage, (size + kHugePage - 1) / kHugePage * kHugePage);
     if (p) madvise(p, size, MADV_HUGEPAGE);  // a hint: the block is usable whatever it answers
     return p;
@@ -134,7 +135,9 @@ struct SparseSPDSolver::Impl {
     analyse_seconds = seconds_since(t0);
     if (!L || common.status < CHOLMOD_OK) {
       cholmod_l_free_sparse(&S, &common);
-      throw SolverError("SparseSPDSolver: symbolic analysis failed (CHOLMOD status " + std::to_string(common.status) + ")");
+      throw SolverError(common.status == CHOLMOD_OUT_OF_MEMORY
+                            ? "SparseSPDSolver: out of memory during the symbolic analysis"
+                            : "SparseSPDSolver: symbolic analysis failed (CHOLMOD status " + std::to_string(common.status) + ")");
     }
     numeric(S);
   }

@@ -42,11 +42,12 @@ class SparseSPDSolver {
   Eigen::MatrixXd solve(const Eigen::MatrixXd& B) const;
   //! Solves A X = B for 1 ≤ k ≤ 4 right-hand sides (a mesh's x, y, z) in the factor's row order, without
   //! permuting them: Y holds n rows of 4 doubles (row-major), row i the right-hand sides of row
-  //! ordering()[i] of A in its first k entries (the others are ignored), and is overwritten with X's rows in
-  //! the same order. For frame loops that assemble B and read X row by row: visiting the rows in this order
-  //! saves solve()'s two permutation passes (6 of the 1M lift transfer frame's ms). Allocates nothing where
+  //! ordering()[i] of A in its first k entries, and is overwritten with X's rows in the same order. The
+  //! entries beyond k may be overwritten, with values of no meaning (keep them finite, e.g. zero). For
+  //! frame loops that assemble B and read X row by row: visiting the rows in this order saves solve()'s two
+  //! permutation passes (about 5 of the 1M lift transfer frame's ms). Allocates nothing where
   //! SupernodalSubstitution solves; elsewhere it goes through solve().
-  //! 	hrow UsageError before factor() or for k outside 1..4.
+  //! \throw UsageError before factor() or for k outside 1..4.
   void solve_ordered(double* Y, int k) const;
   //! The rows of A in the order solve_ordered() takes them (n entries): the factor's fill-reducing
   //! ordering where SupernodalSubstitution solves, else 0, 1, …, n − 1. Empty before factor().

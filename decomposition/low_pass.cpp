@@ -80,6 +80,7 @@ class LowPassSystem {
       else
         solver_.factor(std::move(Auu));  // released before the numeric factorisation
     } catch (const SolverError& e) {
+      if (e.index() < 0) throw SolverError(std::string(kWho) + ": " + e.what());  // not singular: e.g. out of memory
       const long v = e.index() >= 0 ? unknown_[e.index()] : -1;
       // Far beyond the mesh's size ℓ⁴ swamps the data term and the system is singular in floating point.
       const double size = diameter(centred_);

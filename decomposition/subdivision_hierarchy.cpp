@@ -107,6 +107,7 @@ void SubdivisionHierarchy::build(const Positions& fine_S, const Faces& fine_F, c
       solver.factor(N);
     } catch (const SolverError& e) {
       num_fine_ = 0;
+      if (e.index() < 0) throw SolverError(std::string(who) + ": " + e.what());  // not singular: e.g. out of memory
       throw SolverError(
           std::string(who) + ": the least-squares fit of the control points is singular" +
               (e.index() >= 0 ? " at coarse vertex " + std::to_string(e.index()) : std::string()) +

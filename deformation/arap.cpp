@@ -190,6 +190,7 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
   try {
     system_.prepare(L, constrained_);
   } catch (const SolverError& e) {
+    if (e.index() < 0) throw SolverError(std::string("arap: ") + e.what());  // not singular: e.g. out of memory
     throw SolverError("arap: the global system is singular near vertex " + std::to_string(e.index()) +
                           " (a free part of the mesh without a fixed or handle vertex, or a vertex without faces)",
                       e.index());

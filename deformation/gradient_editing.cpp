@@ -21,6 +21,7 @@ void GradientEditing::do_prepare(const Positions& P, const Faces& F, const Regio
   try {
     system_.prepare(-lap.W, constrained);  // Gᵀ A G = −W: the Poisson matrix of (9.10)
   } catch (const SolverError& e) {
+    if (e.index() < 0) throw SolverError(std::string("gradient: ") + e.what());  // not singular: e.g. out of memory
     throw SolverError("gradient: the Poisson system is singular near vertex " + std::to_string(e.index()) +
                           " (a free vertex whose faces all have zero area?)",
                       e.index());

@@ -118,6 +118,7 @@ void LaplacianEditing::prepare_implicit(const Positions& P, const Faces& F, cons
   try {
     system_.prepare(Q, known);
   } catch (const SolverError& e) {
+    if (e.index() < 0) throw SolverError(std::string("laplacian: ") + e.what());  // not singular: e.g. out of memory
     const long v = e.index() >= 0 ? e.index() / 3 : -1;
     throw SolverError("laplacian: the least-squares system is singular near vertex " + std::to_string(v) +
                           " (a free vertex whose faces all have zero area, a one-ring too degenerate to fit, or "
@@ -138,6 +139,7 @@ void LaplacianEditing::prepare_explicit(const Positions& P, const Faces& F, cons
     weights_ = harmonic_weights(dirichlet, region);
     system_.prepare(polyharmonic_matrix(lap, 2), constrained_);  // W M⁻¹ W
   } catch (const SolverError& e) {
+    if (e.index() < 0) throw SolverError(std::string("laplacian (explicit): ") + e.what());  // not singular: e.g. out of memory
     throw SolverError("laplacian (explicit): the system is singular near vertex " + std::to_string(e.index()) +
                           " (a free vertex whose faces all have zero area?)",
                       e.index());

@@ -52,6 +52,7 @@ Eigen::MatrixXd raw_fields(const Positions& P, const Faces& F, const Region& reg
       try {
         laplace.prepare(-cotan_laplacian(P, F).W, constrained);
       } catch (const SolverError& e) {
+        if (e.index() < 0) throw SolverError(std::string("propagate (harmonic field): ") + e.what());  // not singular: e.g. out of memory
         throw SolverError("propagate (harmonic field): the Laplace system is singular at vertex " +
                               std::to_string(e.index()) + " (a free vertex whose faces all have zero area?)",
                           e.index());

@@ -41,6 +41,7 @@ void ShellDeformer::do_prepare(const Positions& P, const Faces& F, const Region&
   try {
     system_.prepare(std::move(Q), constrained_);
   } catch (const SolverError& e) {
+    if (e.index() < 0) throw SolverError(std::string("shell: ") + e.what());  // not singular: e.g. out of memory
     throw SolverError("shell: the system is singular near vertex " + std::to_string(e.index()) +
                           " (a degenerate neighbourhood, or a free vertex whose faces all have zero area)",
                       e.index());

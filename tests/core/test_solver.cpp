@@ -151,6 +151,9 @@ TEST_CASE("SparseSPDSolver::solve_ordered equals solve() in the factor's row ord
   }
   CHECK_THROWS_AS(solver.solve_ordered(unused, 0), UsageError);
   CHECK_THROWS_AS(solver.solve_ordered(unused, 5), UsageError);
+  SparseSPDSolver moved(std::move(solver));
+  CHECK(solver.ordering().empty());  // NOLINT(bugprone-use-after-move): a moved-from solver is empty
+  CHECK(moved.ordering().size() == static_cast<size_t>(n));
 }
 
 #ifdef MSD_HAVE_CHOLMOD

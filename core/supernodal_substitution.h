@@ -36,8 +36,9 @@ class SupernodalSubstitution {
   //! object.
   void solve(const double* B, double* X, int k) const;
   //! The same without the permutations: Y holds n rows of 4 doubles, row i the right-hand sides of row
-  //! ordering()[i] of A in its first k entries (the others are ignored), and is overwritten with X's rows
-  //! in the same order. For frame loops that assemble B and read X row by row in that order.
+  //! ordering()[i] of A in its first k entries, and is overwritten with X's rows in the same order (the
+  //! entries beyond k are solved too, into values of no meaning: keep them finite). For frame loops that
+  //! assemble B and read X row by row in that order.
   void solve_ordered(double* Y, int k) const;
   //! The factor's fill-reducing ordering (CHOLMOD's Perm, n entries): row i of the factored system is
   //! row ordering()[i] of A.

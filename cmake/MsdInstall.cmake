@@ -8,7 +8,7 @@ if(NOT MSD_SHARED)
   # Static libraries carry their private dependencies to the user's link line.
   install(TARGETS msd_opensubdiv msd_stb EXPORT msdeformTargets)
   if(TARGET msd_cholmod)
-    install(TARGETS msd_cholmod EXPORT msdeformTargets)
+    install(TARGETS msd_cholmod msd_lapack EXPORT msdeformTargets)
   endif()
 endif()
 install(EXPORT msdeformTargets NAMESPACE msdeform:: DESTINATION "${MSD_CMAKE_DIR}" COMPONENT development)

@@ -18,6 +18,7 @@
 #include <cstdlib>
 #include <mutex>
 
+#include "msdeform/core/supernodal_factorisation.h"
 #include "msdeform/core/supernodal_substitution.h"
 #else
 #include <Eigen/SparseCholesky>
@@ -145,7 +146,17 @@ struct SparseSPDSolver::Impl {
   // Numeric factorisation into L (whose symbolic analysis is done); frees S.
   void numeric(cholmod_sparse* S) {
     const auto t0 = std::chrono::steady_clock::now();
-    cholmod_l_factorize(S, L, &common);
+    common.status = CHOLMOD_OK;
+    // On two threads where the factor is supernodal (supernodal_factorisation.h), by CHOLMOD otherwise.
+    SupernodalFactorisationResult result;
+    if (L->is_super && (L->xtype == CHOLMOD_REAL || cholmod_l_change_factor(CHOLMOD_REAL, true, true, true, true, L, &common)))
+      result = factorize_supernodal(S, L);
+    if (result.status == SupernodalFactorisationResult::kNotPositiveDefinite)
+      common.status = CHOLMOD_NOT_POSDEF, L->minor = static_cast<size_t>(result.column);
+    else if (result.status == SupernodalFactorisationResult::kOutOfMemory)
+      common.status = CHOLMOD_OUT_OF_MEMORY;
+    else if (result.status == SupernodalFactorisationResult::kUnsupported && common.status >= CHOLMOD_OK)
+      cholmod_l_factorize(S, L, &common);
     numeric_seconds = seconds_since(t0);
     cholmod_l_free_sparse(&S, &common);
     if (common.status == CHOLMOD_NOT_POSDEF) {

@@ -9,6 +9,7 @@
 #include <tbb/parallel_invoke.h>
 
 #include "msdeform/core/parallel.h"
+#include "msdeform/core/supernodal_tree.h"
 
 namespace msd {
 namespace {
@@ -179,71 +180,26 @@ bool SupernodalSubstitution::plan(const cholmod_factor_struct* factor) {
     const Supernode S(L, s);
     std::fill(super_of.begin() + S.j0, super_of.begin() + S.j0 + S.ncol, static_cast<int>(s));
   }
-  std::vector<double> work(ns), subtree(ns);  // entries read per supernode, and in its subtree
-  std::vector<std::vector<long>> children(ns);
+  std::vector<double> work(ns);  // entries read per supernode
   for (long s = 0; s < ns; ++s) {
     const Supernode S(L, s);
     if (S.m > 0) {
       parent[s] = super_of[S.below[0]];
       if (parent[s] <= s) return false;  // not postordered
-      children[parent[s]].push_back(s);
     }
     work[s] = static_cast<double>(S.ncol) * static_cast<double>(S.ncol + S.m);
   }
-  for (long s = 0; s < ns; ++s) {
-    subtree[s] += work[s];
-    if (parent[s] >= 0) subtree[parent[s]] += subtree[s];
-  }
-  double total = 0;
-  std::vector<long> frontier;  // roots of disjoint subtrees, split between the two threads
-  for (long s = 0; s < ns; ++s)
-    if (parent[s] < 0) frontier.push_back(s), total += subtree[s];
-  // Move the largest subtree's root above the split until the split's time (the root work done on one
-  // thread, plus the larger half of the subtrees shared out largest first) stops improving.
-  auto halves = [&](const std::vector<long>& roots, std::vector<int>* half) {
-    std::vector<long> order(roots.size());
-    for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<long>(i);
-    std::sort(order.begin(), order.end(), [&](long a, long b) { return subtree[roots[a]] > subtree[roots[b]]; });
-    double load[2] = {0, 0};
-    if (half) half->assign(roots.size(), 0);
-    for (long i : order) {
-      const int h = load[1] < load[0];
-      load[h] += subtree[roots[i]];
-      if (half) (*half)[i] = h;
-    }
-    return std::max(load[0], load[1]);
-  };
-  double above = 0, best = total;
-  std::vector<long> best_frontier;
-  for (int step = 0; step < 1024 && !frontier.empty(); ++step) {
-    const double time = above + halves(frontier, nullptr);
-    if (time < best) best = time, best_frontier = frontier;
-    const auto largest = std::max_element(frontier.begin(), frontier.end(),
-                                          [&](long a, long b) { return subtree[a] < subtree[b]; });
-    const long s = *largest;
-    frontier.erase(largest);
-    above += work[s];
-    frontier.insert(frontier.end(), children[s].begin(), children[s].end());
-  }
-  // Groups: 0 and 1 for the subtrees under the chosen roots, 2 for the rest (parents before children).
-  std::vector<int> group(ns, 2), half;
-  halves(best_frontier, &half);
-  for (size_t i = 0; i < best_frontier.size(); ++i) group[best_frontier[i]] = half[i];
-  for (long s = ns - 1; s >= 0; --s)
-    if (group[s] == 2 && parent[s] >= 0) group[s] = group[parent[s]];
+  const std::vector<int> group = split_elimination_tree(parent, work, &parallel_share_);
   top_slot_.assign(n, -1);
-  double parallel = 0;
   for (long s = 0; s < ns; ++s) {
     if (group[s] < 2) {
       group_[group[s]].push_back(s);
-      parallel += work[s];
       continue;
     }
     top_.push_back(s);
     const Supernode S(L, s);
     for (long j = S.j0; j < S.j0 + S.ncol; ++j) top_slot_[j] = static_cast<int>(num_top_columns_++);
   }
-  parallel_share_ = total > 0 ? parallel / total : 0;
   y_.assign(4 * n, 0.0);
   for (auto& w : w_) w.assign(4 * std::max<size_t>(L->maxesize, 1), 0.0);
   for (auto& t : top_update_) t.assign(4 * std::max<long>(num_top_columns_, 1), 0.0);

@@ -2,6 +2,7 @@
 #include <strings.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <utility>
 #include <vector>
@@ -17,6 +18,7 @@
 #ifdef MSD_HAVE_CHOLMOD
 #include <cholmod.h>
 
+#include "msdeform/core/supernodal_factorisation.h"
 #include "msdeform/core/supernodal_substitution.h"
 #endif
 
@@ -195,6 +197,87 @@ TEST_CASE("SupernodalSubstitution equals CHOLMOD's solve, splits the tree, refus
   cholmod_l_free_dense(&reference, &common);
   cholmod_l_free_factor(&L, &common);
   cholmod_l_free_sparse(&S, &common);
+  cholmod_l_finish(&common);
+}
+namespace {
+// A (symmetric, both triangles stored) as CHOLMOD's matrix, marked lower (stype -1): the upper triangle is
+// there to be ignored.
+cholmod_sparse* both_triangles(const SparseMatrix& A, cholmod_common& common) {
+  cholmod_sparse* S = cholmod_l_allocate_sparse(A.rows(), A.cols(), A.nonZeros(), true, true, -1, CHOLMOD_REAL, &common);
+  for (Eigen::Index j = 0; j <= A.cols(); ++j) static_cast<SuiteSparse_long*>(S->p)[j] = A.outerIndexPtr()[j];
+  for (Eigen::Index k = 0; k < A.nonZeros(); ++k) {
+    static_cast<SuiteSparse_long*>(S->i)[k] = A.innerIndexPtr()[k];
+    static_cast<double*>(S->x)[k] = A.valuePtr()[k];
+  }
+  return S;
+}
+}  // namespace
+
+TEST_CASE("The two-thread supernodal factorisation equals CHOLMOD's and reports a pivot that is not positive",
+          "[core][solver]") {
+  // A grid bi-Laplacian: supernodes from 1 to a few hundred columns, the tree split between both threads.
+  const SparseMatrix lap = grid_laplacian(90);
+  SparseMatrix A = lap * lap;
+  A.makeCompressed();
+  cholmod_common common;
+  cholmod_l_start(&common);
+  common.supernodal = CHOLMOD_SUPERNODAL;
+  cholmod_sparse* S = both_triangles(A, common);
+  cholmod_factor* reference = cholmod_l_analyze(S, &common);
+  REQUIRE(reference);
+  REQUIRE(reference->is_super);
+  cholmod_factor* L = cholmod_l_copy_factor(reference, &common);
+  REQUIRE(cholmod_l_factorize(S, reference, &common));
+  REQUIRE(reference->minor == reference->n);
+  // Not numeric yet: refused, nothing touched.
+  CHECK(factorize_supernodal(S, L).status == SupernodalFactorisationResult::kUnsupported);
+  REQUIRE(cholmod_l_change_factor(CHOLMOD_REAL, true, true, true, true, L, &common));
+  const auto done = factorize_supernodal(S, L);
+  REQUIRE(done.status == SupernodalFactorisationResult::kDone);
+  CHECK(L->minor == L->n);
+  const Eigen::Map<const Eigen::VectorXd> expected(static_cast<const double*>(reference->x), reference->xsize);
+  const Eigen::Map<const Eigen::VectorXd> got(static_cast<const double*>(L->x), L->xsize);
+  REQUIRE(got.size() == expected.size());
+  CHECK((got - expected).cwiseAbs().maxCoeff() <= 1e-12 * expected.cwiseAbs().maxCoeff());
+  // A refactorisation with new values on the same structure.
+  SparseMatrix A2 = A;
+  A2.coeffs() *= 3.0;
+  cholmod_sparse* S2 = both_triangles(A2, common);
+  REQUIRE(factorize_supernodal(S2, L).status == SupernodalFactorisationResult::kDone);
+  CHECK((got - std::sqrt(3.0) * expected).cwiseAbs().maxCoeff() <= 1e-12 * expected.cwiseAbs().maxCoeff());
+  // Shifted below its smallest eigenvalue but not its largest: indefinite. CHOLMOD fails too.
+  SparseMatrix shifted = A;
+  shifted.diagonal().array() -= 0.5 * shifted.diagonal().mean();
+  cholmod_sparse* S3 = both_triangles(shifted, common);
+  const auto failed = factorize_supernodal(S3, L);
+  CHECK(failed.status == SupernodalFactorisationResult::kNotPositiveDefinite);
+  CHECK(failed.column >= 0);
+  CHECK(failed.column < static_cast<long>(L->n));
+  cholmod_l_factorize(S3, reference, &common);
+  CHECK(common.status == CHOLMOD_NOT_POSDEF);
+  // An entry outside the analysed pattern is refused (CHOLMOD would drop it): a tridiagonal matrix on the
+  // analysis of a diagonal one.
+  SparseMatrix diagonal(50, 50), tridiagonal(50, 50);
+  for (int i = 0; i < 50; ++i) {
+    diagonal.insert(i, i) = 4;
+    tridiagonal.insert(i, i) = 4;
+    if (i > 0) tridiagonal.insert(i, i - 1) = tridiagonal.insert(i - 1, i) = -1;
+  }
+  diagonal.makeCompressed();
+  tridiagonal.makeCompressed();
+  cholmod_sparse* S4 = both_triangles(diagonal, common);
+  cholmod_sparse* S5 = both_triangles(tridiagonal, common);
+  cholmod_factor* diagonal_factor = cholmod_l_analyze(S4, &common);
+  REQUIRE(cholmod_l_change_factor(CHOLMOD_REAL, true, true, true, true, diagonal_factor, &common));
+  CHECK(factorize_supernodal(S4, diagonal_factor).status == SupernodalFactorisationResult::kDone);
+  CHECK(factorize_supernodal(S5, diagonal_factor).status == SupernodalFactorisationResult::kUnsupported);
+  // A simplicial factor is refused.
+  common.supernodal = CHOLMOD_SIMPLICIAL;
+  cholmod_factor* simplicial = cholmod_l_analyze(S, &common);
+  REQUIRE(cholmod_l_factorize(S, simplicial, &common));
+  CHECK(factorize_supernodal(S, simplicial).status == SupernodalFactorisationResult::kUnsupported);
+  for (cholmod_sparse** m : {&S, &S2, &S3, &S4, &S5}) cholmod_l_free_sparse(m, &common);
+  for (cholmod_factor** f : {&simplicial, &reference, &L, &diagonal_factor}) cholmod_l_free_factor(f, &common);
   cholmod_l_finish(&common);
 }
 #endif

@@ -136,11 +136,13 @@ TEST_CASE("fairing the bumpy plane's free region removes the bumps there", "[dec
     options.order = static_cast<FairingOrder>(k);
     CHECK(max_height(fair_region(tailless, s.F, s.region, options)) <= 1e-12);
   }
-  // Uniform weights do not see the bumps' metric: the regular grid is reproduced in the plane.
+  // Uniform weights do not see the bumps' metric: the regular grid is reproduced in the plane, to the
+  // rounding that Δ³'s conditioning amplifies (measured for k = 3: 9.8e-9 with CHOLMOD's factorisation,
+  // 1.01e-8 with SparseSPDSolver's two-thread one).
   options.weights = LaplacianWeights::Uniform;
   for (int k = 1; k <= 3; ++k) {
     options.order = static_cast<FairingOrder>(k);
-    CHECK(in_plane_drift(fair_region(s.P, s.F, s.region, options)) <= 1e-8);
+    CHECK(in_plane_drift(fair_region(s.P, s.F, s.region, options)) <= 5e-8);
   }
   // Δb = 0 literally on the outline too (fix_mesh_boundary off): the membrane minimises area and pulls
   // the outline in by several spacings.

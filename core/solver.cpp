@@ -151,6 +151,11 @@ struct SparseSPDSolver::Impl {
     SupernodalFactorisationResult result;
     if (L->is_super && (L->xtype == CHOLMOD_REAL || cholmod_l_change_factor(CHOLMOD_REAL, true, true, true, true, L, &common)))
       result = factorize_supernodal(S, L);
+    if (result.status == SupernodalFactorisationResult::kPatternMismatch) {
+      cholmod_l_free_sparse(&S, &common);
+      release();
+      throw UsageError("SparseSPDSolver::refactor: the matrix has an entry outside the sparsity pattern of the last factor() (call factor())");
+    }
     if (result.status == SupernodalFactorisationResult::kNotPositiveDefinite)
       common.status = CHOLMOD_NOT_POSDEF, L->minor = static_cast<size_t>(result.column);
     else if (result.status == SupernodalFactorisationResult::kOutOfMemory)
@@ -160,7 +165,9 @@ struct SparseSPDSolver::Impl {
     numeric_seconds = seconds_since(t0);
     cholmod_l_free_sparse(&S, &common);
     if (common.status == CHOLMOD_NOT_POSDEF) {
-      const long col = static_cast<long>(L->minor);
+      // L->minor is a column of the permuted system: the row and column of A is Perm[minor].
+      const long minor = static_cast<long>(L->minor);
+      const long col = L->Perm && minor >= 0 && minor < n ? static_cast<const SuiteSparse_long*>(L->Perm)[minor] : minor;
       release();
       throw SolverError("SparseSPDSolver: matrix is not positive definite (failed at column " + std::to_string(col) + ")", col);
     }

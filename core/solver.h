@@ -9,11 +9,13 @@
 
 namespace msd {
 
-//! Factors a sparse SPD matrix once and solves for any number of right-hand sides. Uses CHOLMOD's
-//! supernodal Cholesky when msdeform was built with SuiteSparse, else Eigen's SimplicialLDLT; the class
-//! hides which. With CHOLMOD, up to 4 right-hand sides (a mesh's x, y, z) are solved by
-//! SupernodalSubstitution on both cores, more by CHOLMOD's solve. solve() reuses internal workspace, so
-//! it is not safe to call concurrently on one object.
+//! Factors a sparse SPD matrix once and solves for any number of right-hand sides. Uses a supernodal
+//! Cholesky factorisation when msdeform was built with SuiteSparse, else Eigen's SimplicialLDLT; the class
+//! hides which. With SuiteSparse, CHOLMOD orders and analyses the matrix (AMD), the numeric factorisation
+//! runs on both cores (supernodal_factorisation.h; it sets OpenBLAS to one thread meanwhile), up to 4
+//! right-hand sides (a mesh's x, y, z) are solved by SupernodalSubstitution on both cores, more by
+//! CHOLMOD's solve. solve() reuses internal workspace, so it is not safe to call concurrently on one
+//! object.
 class SparseSPDSolver {
  public:
   SparseSPDSolver();
@@ -22,8 +24,8 @@ class SparseSPDSolver {
   SparseSPDSolver& operator=(SparseSPDSolver&&) noexcept;
 
   //! Factors A (n by n, symmetric; only its lower triangle is read).
-  //! \throw SolverError if A is not square, not positive definite (index() = the failing column), or
-  //! the factor does not fit in memory.
+  //! \throw SolverError if A is not square, not positive definite (index() = the row and column of A,
+  //! in A's own order, whose pivot was not positive), or the factor does not fit in memory.
   void factor(const SparseMatrix& A);
   //! The same, releasing A's storage once it is copied into the factorisation's own format (with CHOLMOD
   //! before the numeric factorisation, the peak of memory; the Eigen fallback after it): for callers that
@@ -31,7 +33,9 @@ class SparseSPDSolver {
   void factor(SparseMatrix&& A);
   //! Numeric refactorisation of a matrix with the same size and sparsity pattern as the last factor()
   //! (iterative methods whose values change each step): the ordering and symbolic analysis are reused.
-  //! \throw UsageError without a previous factor() or for another size; SolverError as factor().
+  //! Entries of the last pattern may be missing from A (they count as zeros).
+  //! \throw UsageError without a previous factor(), for another size, or (with SuiteSparse) for an entry
+  //! outside the last pattern, after which the solver is not factored; SolverError as factor().
   void refactor(const SparseMatrix& A);
   bool factored() const;
   int size() const;

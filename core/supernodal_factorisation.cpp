@@ -1,11 +1,14 @@
 #include "msdeform/core/supernodal_factorisation.h"
 
 #include <cholmod.h>
+#include <sys/resource.h>
 #include <tbb/parallel_invoke.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <climits>
+#include <cstdio>
 #include <memory>
 #include <vector>
 
@@ -95,6 +98,22 @@ class OneBlasThread {
   int saved_ = 0;
 };
 
+// OpenBLAS (0.3.21) gives each thread that calls it a work buffer on its first call (128 MB of address
+// space on x86-64) and retries that allocation forever when it fails. Under an address-space limit
+// (ulimit -v) without room for a second buffer, the second thread would hang where one thread finishes:
+// measured, a shell prepare of CGAL's armadillo hung at 600–700 MB and finished on one thread.
+bool room_for_a_second_blas_thread() {
+  rlimit limit;
+  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return true;
+  unsigned long pages = 0;  // the process's address space now (the first field of statm)
+  if (FILE* statm = std::fopen("/proc/self/statm", "r")) {
+    if (std::fscanf(statm, "%lu", &pages) != 1) pages = 0;
+    std::fclose(statm);
+  }
+  const double used = static_cast<double>(pages) * static_cast<double>(sysconf(_SC_PAGESIZE));
+  return used + 512.0 * (1 << 20) < static_cast<double>(limit.rlim_cur);
+}
+
 class Factorisation {
  public:
   Factorisation(const cholmod_sparse* A, cholmod_factor* L)
@@ -106,6 +125,7 @@ class Factorisation {
         rows_(static_cast<const Int*>(L->s)),
         perm_(static_cast<const Int*>(L->Perm)),
         x_(static_cast<double*>(L->x)),
+        max_update_(L->maxcsize > 0 ? static_cast<long>(L->maxcsize) : LONG_MAX),
         pinv_(n_),
         super_of_(n_),
         next_(ns_, -1),
@@ -114,11 +134,6 @@ class Factorisation {
     for (long k = 0; k < n_; ++k) pinv_[perm_[k]] = k;
     A_ = permute(A, pinv_);
     for (long s = 0; s < ns_; ++s) std::fill(super_of_.begin() + super_[s], super_of_.begin() + super_[s + 1], s);
-    for (auto& w : work_) {
-      w.map.reset(new Int[n_]());  // zeros: add_matrix checks any entry it reads
-      w.update.reset(new double[std::max<size_t>(L->maxcsize, 1)]);
-      w.head.assign(ns_, -1);
-    }
   }
 
   // Factors L: the two groups in parallel, each summing its updates to the supernodes above the split
@@ -134,13 +149,23 @@ class Factorisation {
       if (group[s] == 2) in_l.push_back(px_[s]), in_buffer.push_back(buffer_size), buffer_size += size(s);
     }
     std::unique_ptr<double[]> buffer(new double[std::max<long>(buffer_size, 1)]);
-    {
+    allocate(work_[0], order[0]);
+    allocate(work_[1], order[1]);
+    if (room_for_a_second_blas_thread()) {
       OneBlasThread one_thread;
       tbb::parallel_invoke([&] { factor_group(0, order[0], order[2], x_, in_l); },
                            [&] { factor_group(1, order[1], order[2], buffer.get(), in_buffer); });
+    } else {
+      factor_group(0, order[0], order[2], x_, in_l);
+      factor_group(1, order[1], order[2], buffer.get(), in_buffer);
     }
+    work_[0] = Workspace(), work_[1] = Workspace();
+    allocate(work_[2], order[2]);
     if (!failed()) factor_top(order[2], buffer.get(), in_buffer);
-    if (pattern_mismatch_) return result;  // kUnsupported
+    if (pattern_mismatch_) {
+      result.status = SupernodalFactorisationResult::kPatternMismatch;
+      return result;
+    }
     if (failed()) {
       result.status = SupernodalFactorisationResult::kNotPositiveDefinite;
       result.column = failed_column_;
@@ -214,6 +239,18 @@ class Factorisation {
     std::vector<Int> head;             // per supernode, the descendants waiting to update it (linked by next_)
   };
 
+  // Workspace for factoring `supernodes`: its update block holds the largest update one of them makes
+  // (rows below the diagonal block, squared; at most L->maxcsize).
+  void allocate(Workspace& w, const std::vector<long>& supernodes) const {
+    long largest = 1;
+    for (long s : supernodes) {
+      const long below = (pi_[s + 1] - pi_[s]) - (super_[s + 1] - super_[s]);
+      largest = std::max(largest, below * below);
+    }
+    w.map.reset(new Int[n_]());  // zeros: add_matrix checks any entry it reads
+    w.update.reset(new double[std::min(largest, max_update_)]);
+    w.head.assign(ns_, -1);
+  }
   long size(long s) const { return (super_[s + 1] - super_[s]) * (pi_[s + 1] - pi_[s]); }
   void set_map(long s, Workspace& w) const {
     for (Int k = pi_[s]; k < pi_[s + 1]; ++k) w.map[rows_[k]] = k - pi_[s];
@@ -303,6 +340,7 @@ class Factorisation {
   const long n_, ns_;
   const Int *super_, *pi_, *px_, *rows_, *perm_;
   double* x_;
+  const long max_update_;  // L->maxcsize, the largest update block of all (no bound when it is not set)
   std::vector<Int> pinv_;
   PermutedLower A_;
   std::vector<long> super_of_;

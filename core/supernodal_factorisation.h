@@ -17,7 +17,7 @@ struct cholmod_sparse_struct;
 namespace msd {
 
 struct SupernodalFactorisationResult {
-  enum Status { kDone, kNotPositiveDefinite, kOutOfMemory, kUnsupported } status = kUnsupported;
+  enum Status { kDone, kNotPositiveDefinite, kPatternMismatch, kOutOfMemory, kUnsupported } status = kUnsupported;
   long column = -1;  //!< kNotPositiveDefinite: the factor's column whose pivot was not positive
 };
 
@@ -25,13 +25,14 @@ struct SupernodalFactorisationResult {
 //! (cholmod_l_analyze with CHOLMOD's default postorder), whose values L already holds (CHOLMOD_REAL, LLᵀ,
 //! as cholmod_l_change_factor makes them). A: the lower triangle of a symmetric n×n matrix with the pattern
 //! L was analysed for (stype -1, real, 64-bit indices; entries above the diagonal are ignored).
-//! Returns kUnsupported for any other factor or matrix (touching nothing), and for an entry of A outside
-//! L's pattern (L's values are then of no use: CHOLMOD's factorisation drops such entries);
-//! kNotPositiveDefinite with the first failing column found (L's values are of no use either);
-//! kOutOfMemory when the workspace does not fit (4 n indices, the permuted A, three update blocks of
-//! L->maxcsize entries and the values of the supernodes above the split once more). Calls BLAS from two
-//! threads; with OpenBLAS it runs OpenBLAS on one thread meanwhile (a process-wide setting, restored
-//! after).
+//! Returns kUnsupported for any other factor or matrix (touching nothing); kPatternMismatch for an entry of
+//! A outside L's pattern (CHOLMOD's own factorisation drops such entries silently); kNotPositiveDefinite
+//! with the first failing column found (after either, L's values are of no use); kOutOfMemory when the
+//! workspace does not fit (4 n indices, the permuted A, three update blocks of L->maxcsize entries and the
+//! values of the supernodes above the split once more). Calls BLAS from two threads; with OpenBLAS it runs
+//! OpenBLAS on one thread meanwhile (a process-wide setting, restored after). Under an address-space
+//! limit (RLIMIT_AS) with less than 512 MB left it runs on the calling thread alone: OpenBLAS hangs when it
+//! cannot map a second thread's buffer.
 SupernodalFactorisationResult factorize_supernodal(const cholmod_sparse_struct* A, cholmod_factor_struct* L);
 
 }  // namespace msd

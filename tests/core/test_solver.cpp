@@ -255,7 +255,7 @@ TEST_CASE("The two-thread supernodal factorisation equals CHOLMOD's and reports 
   CHECK(failed.column < static_cast<long>(L->n));
   cholmod_l_factorize(S3, reference, &common);
   CHECK(common.status == CHOLMOD_NOT_POSDEF);
-  // An entry outside the analysed pattern is refused (CHOLMOD would drop it): a tridiagonal matrix on the
+  // An entry outside the analysed pattern is named (CHOLMOD would drop it): a tridiagonal matrix on the
   // analysis of a diagonal one.
   SparseMatrix diagonal(50, 50), tridiagonal(50, 50);
   for (int i = 0; i < 50; ++i) {
@@ -270,7 +270,7 @@ TEST_CASE("The two-thread supernodal factorisation equals CHOLMOD's and reports 
   cholmod_factor* diagonal_factor = cholmod_l_analyze(S4, &common);
   REQUIRE(cholmod_l_change_factor(CHOLMOD_REAL, true, true, true, true, diagonal_factor, &common));
   CHECK(factorize_supernodal(S4, diagonal_factor).status == SupernodalFactorisationResult::kDone);
-  CHECK(factorize_supernodal(S5, diagonal_factor).status == SupernodalFactorisationResult::kUnsupported);
+  CHECK(factorize_supernodal(S5, diagonal_factor).status == SupernodalFactorisationResult::kPatternMismatch);
   // A simplicial factor is refused.
   common.supernodal = CHOLMOD_SIMPLICIAL;
   cholmod_factor* simplicial = cholmod_l_analyze(S, &common);
@@ -294,6 +294,23 @@ TEST_CASE("SparseSPDSolver::refactor reuses the analysis for new values on the s
   const Eigen::MatrixXd B = Eigen::MatrixXd::Random(A.rows(), 2);
   CHECK((A2 * solver.solve(B) - B).norm() <= 1e-10 * B.norm());
   CHECK_THROWS_AS(solver.refactor(SparseMatrix(3, 3)), UsageError);
+#ifdef MSD_HAVE_CHOLMOD
+  // An entry outside the factored pattern is refused (CHOLMOD's factorisation dropped it silently).
+  SparseMatrix diagonal(40, 40), tridiagonal(40, 40);
+  for (int i = 0; i < 40; ++i) {
+    diagonal.insert(i, i) = 4;
+    tridiagonal.insert(i, i) = 4;
+    if (i > 0) tridiagonal.insert(i, i - 1) = tridiagonal.insert(i - 1, i) = -1;
+  }
+  solver.factor(diagonal);
+  try {
+    solver.refactor(tridiagonal);
+    FAIL("expected UsageError");
+  } catch (const UsageError& e) {
+    CHECK(std::string(e.what()).find("outside the sparsity pattern") != std::string::npos);
+  }
+  CHECK_FALSE(solver.factored());
+#endif
 }
 
 TEST_CASE("SparseSPDSolver reports a matrix that is not positive definite", "[core][solver]") {
@@ -314,6 +331,23 @@ TEST_CASE("SparseSPDSolver reports a matrix that is not positive definite", "[co
     CHECK(e.index() == 1);
   }
   CHECK_THROWS_AS(solver.solve(Eigen::MatrixXd::Ones(3, 1)), UsageError);
+#ifdef MSD_HAVE_CHOLMOD
+  // index() is the row of A, not the column of the permuted system the factorisation failed at (that
+  // named a wrong vertex in every "singular near vertex" message): a grid Laplacian, whose principal
+  // submatrices are all positive definite, with one diagonal entry made negative fails there and only
+  // there, wherever the ordering puts it.
+  const SparseMatrix grid = grid_laplacian(40);
+  for (int row : {0, 77, 500, static_cast<int>(grid.rows()) - 1}) {
+    SparseMatrix bad = grid;
+    bad.coeffRef(row, row) = -1;
+    try {
+      solver.factor(bad);
+      FAIL("expected SolverError");
+    } catch (const SolverError& e) {
+      CHECK(e.index() == row);
+    }
+  }
+#endif
 }
 
 TEST_CASE("ConstrainedQuadratic equals a dense reference solve, several right-hand sides", "[core][solver]") {

@@ -127,13 +127,12 @@ class Factorisation {
         x_(static_cast<double*>(L->x)),
         max_update_(L->maxcsize > 0 ? static_cast<long>(L->maxcsize) : LONG_MAX),
         pinv_(n_),
-        super_of_(n_),
         next_(ns_, -1),
         position_(ns_, 0),
         failed_column_(LONG_MAX) {
     for (long k = 0; k < n_; ++k) pinv_[perm_[k]] = k;
     A_ = permute(A, pinv_);
-    for (long s = 0; s < ns_; ++s) std::fill(super_of_.begin() + super_[s], super_of_.begin() + super_[s + 1], s);
+    postordered_ = supernodal_elimination_tree(L, super_of_, parent_);
   }
 
   // Factors L: the two groups in parallel, each summing its updates to the supernodes above the split
@@ -160,8 +159,10 @@ class Factorisation {
       factor_group(1, order[1], order[2], buffer.get(), in_buffer);
     }
     work_[0] = Workspace(), work_[1] = Workspace();
-    allocate(work_[2], order[2]);
-    if (!failed()) factor_top(order[2], buffer.get(), in_buffer);
+    if (!failed()) {
+      allocate(work_[2], order[2]);
+      factor_top(order[2], buffer.get(), in_buffer);
+    }
     if (pattern_mismatch_) {
       result.status = SupernodalFactorisationResult::kPatternMismatch;
       return result;
@@ -178,18 +179,13 @@ class Factorisation {
  private:
   // The group of every supernode (split_elimination_tree), or an empty vector when L is not postordered.
   std::vector<int> split() const {
-    std::vector<long> parent(ns_, -1);
+    if (!postordered_) return {};
     std::vector<double> work(ns_);  // flops, up to a constant: the supernode's own and its updates
     for (long s = 0; s < ns_; ++s) {
-      const double ncol = static_cast<double>(super_[s + 1] - super_[s]);
       const double nrow = static_cast<double>(pi_[s + 1] - pi_[s]);
-      work[s] = ncol * nrow * nrow;
-      if (nrow > ncol) {
-        parent[s] = super_of_[rows_[pi_[s] + static_cast<long>(ncol)]];
-        if (parent[s] <= s) return {};
-      }
+      work[s] = static_cast<double>(super_[s + 1] - super_[s]) * nrow * nrow;
     }
-    return split_elimination_tree(parent, work);
+    return split_elimination_tree(parent_, work);
   }
 
   // Group g's part (workspace g): factors its supernodes (ascending), then sums their updates to the
@@ -235,7 +231,7 @@ class Factorisation {
   }
   struct Workspace {
     std::unique_ptr<Int[]> map;        // row → its position in the current supernode
-    std::unique_ptr<double[]> update;  // one descendant's update (L->maxcsize entries)
+    std::unique_ptr<double[]> update;  // one descendant's update (allocate() sizes it)
     std::vector<Int> head;             // per supernode, the descendants waiting to update it (linked by next_)
   };
 
@@ -343,7 +339,8 @@ class Factorisation {
   const long max_update_;  // L->maxcsize, the largest update block of all (no bound when it is not set)
   std::vector<Int> pinv_;
   PermutedLower A_;
-  std::vector<long> super_of_;
+  std::vector<long> super_of_, parent_;  // supernodal_elimination_tree
+  bool postordered_ = false;
   std::vector<Int> next_, position_;  // per supernode: its link in a waiting list, its first row not applied
   Workspace work_[3];                 // the two groups' and the top's
   std::atomic<long> failed_column_;

@@ -172,21 +172,11 @@ bool SupernodalSubstitution::plan(const cholmod_factor_struct* factor) {
       L->n > static_cast<size_t>(INT_MAX))
     return false;
   const long n = static_cast<long>(L->n), ns = static_cast<long>(L->nsuper);
-  // The supernodal elimination tree: a supernode's parent holds its first row below the diagonal. A
-  // postordered analysis numbers every subtree contiguously, parents last.
-  std::vector<int> super_of(n);
-  std::vector<long> parent(ns, -1);
-  for (long s = 0; s < ns; ++s) {
-    const Supernode S(L, s);
-    std::fill(super_of.begin() + S.j0, super_of.begin() + S.j0 + S.ncol, static_cast<int>(s));
-  }
+  std::vector<long> super_of, parent;
+  if (!supernodal_elimination_tree(L, super_of, parent)) return false;
   std::vector<double> work(ns);  // entries read per supernode
   for (long s = 0; s < ns; ++s) {
     const Supernode S(L, s);
-    if (S.m > 0) {
-      parent[s] = super_of[S.below[0]];
-      if (parent[s] <= s) return false;  // not postordered
-    }
     work[s] = static_cast<double>(S.ncol) * static_cast<double>(S.ncol + S.m);
   }
   const std::vector<int> group = split_elimination_tree(parent, work, &parallel_share_);

@@ -1,8 +1,31 @@
 #include "msdeform/core/supernodal_tree.h"
 
+#include <cholmod.h>
+
 #include <algorithm>
 
 namespace msd {
+
+bool supernodal_elimination_tree(const cholmod_factor_struct* factor, std::vector<long>& super_of,
+                                 std::vector<long>& parent) {
+  using Int = SuiteSparse_long;
+  const cholmod_factor* L = factor;
+  const auto* super = static_cast<const Int*>(L->super);
+  const auto* pi = static_cast<const Int*>(L->pi);
+  const auto* rows = static_cast<const Int*>(L->s);
+  const long ns = static_cast<long>(L->nsuper);
+  super_of.resize(L->n);
+  for (long s = 0; s < ns; ++s) std::fill(super_of.begin() + super[s], super_of.begin() + super[s + 1], s);
+  parent.assign(ns, -1);
+  for (long s = 0; s < ns; ++s) {
+    const Int ncol = super[s + 1] - super[s];
+    if (pi[s + 1] - pi[s] > ncol) {
+      parent[s] = super_of[rows[pi[s] + ncol]];
+      if (parent[s] <= s) return false;
+    }
+  }
+  return true;
+}
 
 std::vector<int> split_elimination_tree(const std::vector<long>& parent, const std::vector<double>& work,
                                         double* parallel_share) {

@@ -4,7 +4,17 @@
 
 #include <vector>
 
+struct cholmod_factor_struct;
+
 namespace msd {
+
+//! The supernodal elimination tree of L, a supernodal CHOLMOD factor with 64-bit indices: super_of[j] is
+//! the supernode holding column j (n entries), parent[s] the supernode holding s's first row below its
+//! diagonal block, or -1 (nsuper entries). Returns false when the tree is not postordered (a parent
+//! numbered before its child), as every postordered analysis numbers each subtree contiguously, parents
+//! last.
+bool supernodal_elimination_tree(const cholmod_factor_struct* L, std::vector<long>& super_of,
+                                 std::vector<long>& parent);
 
 //! Splits a postordered elimination forest (parent[s] > s, or -1 at a root) whose node s costs work[s]
 //! into two groups of disjoint subtrees of about equal work, which can be processed in parallel, and the

@@ -89,6 +89,15 @@ SparseMatrix grid_laplacian(int n) {
     if (interior[v]) inner.push_back(v);
   return submatrix(SparseMatrix(-cotan_laplacian(P, F).W), inner, inner);
 }
+// n×n, 4 on the diagonal and -1 on the `bandwidth` diagonals on either side: positive definite.
+SparseMatrix band_matrix(int n, int bandwidth) {
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int i = 0; i < n; ++i)
+    for (int j = std::max(0, i - bandwidth); j <= std::min(n - 1, i + bandwidth); ++j) entries.emplace_back(i, j, i == j ? 4 : -1);
+  SparseMatrix A(n, n);
+  A.setFromTriplets(entries.begin(), entries.end());
+  return A;
+}
 }  // namespace
 
 TEST_CASE("SparseSPDSolver: 1 to 4 right-hand sides equal the same columns solved among 5, also in place",
@@ -159,17 +168,26 @@ TEST_CASE("SparseSPDSolver::solve_ordered equals solve() in the factor's row ord
 }
 
 #ifdef MSD_HAVE_CHOLMOD
+namespace {
+// A's stored entries (compressed columns) as CHOLMOD's matrix, marked lower (stype -1): CHOLMOD reads the
+// lower triangle, and ignores an upper one if A stores it too.
+cholmod_sparse* to_cholmod(SparseMatrix A, cholmod_common& common) {
+  A.makeCompressed();
+  cholmod_sparse* S = cholmod_l_allocate_sparse(A.rows(), A.cols(), A.nonZeros(), true, true, -1, CHOLMOD_REAL, &common);
+  for (Eigen::Index j = 0; j <= A.cols(); ++j) static_cast<SuiteSparse_long*>(S->p)[j] = A.outerIndexPtr()[j];
+  for (Eigen::Index k = 0; k < A.nonZeros(); ++k) {
+    static_cast<SuiteSparse_long*>(S->i)[k] = A.innerIndexPtr()[k];
+    static_cast<double*>(S->x)[k] = A.valuePtr()[k];
+  }
+  return S;
+}
+}  // namespace
+
 TEST_CASE("SupernodalSubstitution equals CHOLMOD's solve, splits the tree, refuses other factors", "[core][solver]") {
   const SparseMatrix A = grid_laplacian(150);
   cholmod_common common;
   cholmod_l_start(&common);
-  cholmod_sparse* S = cholmod_l_allocate_sparse(A.rows(), A.cols(), A.nonZeros(), true, true, -1, CHOLMOD_REAL, &common);
-  const SparseMatrix lower = A.triangularView<Eigen::Lower>();  // column-major, as CHOLMOD stores it
-  for (Eigen::Index j = 0; j <= A.cols(); ++j) static_cast<SuiteSparse_long*>(S->p)[j] = lower.outerIndexPtr()[j];
-  for (Eigen::Index k = 0; k < lower.nonZeros(); ++k) {
-    static_cast<SuiteSparse_long*>(S->i)[k] = lower.innerIndexPtr()[k];
-    static_cast<double*>(S->x)[k] = lower.valuePtr()[k];
-  }
+  cholmod_sparse* S = to_cholmod(A.triangularView<Eigen::Lower>(), common);
   common.supernodal = CHOLMOD_SUPERNODAL;
   cholmod_factor* L = cholmod_l_analyze(S, &common);
   REQUIRE(cholmod_l_factorize(S, L, &common));
@@ -199,19 +217,6 @@ TEST_CASE("SupernodalSubstitution equals CHOLMOD's solve, splits the tree, refus
   cholmod_l_free_sparse(&S, &common);
   cholmod_l_finish(&common);
 }
-namespace {
-// A (symmetric, both triangles stored) as CHOLMOD's matrix, marked lower (stype -1): the upper triangle is
-// there to be ignored.
-cholmod_sparse* both_triangles(const SparseMatrix& A, cholmod_common& common) {
-  cholmod_sparse* S = cholmod_l_allocate_sparse(A.rows(), A.cols(), A.nonZeros(), true, true, -1, CHOLMOD_REAL, &common);
-  for (Eigen::Index j = 0; j <= A.cols(); ++j) static_cast<SuiteSparse_long*>(S->p)[j] = A.outerIndexPtr()[j];
-  for (Eigen::Index k = 0; k < A.nonZeros(); ++k) {
-    static_cast<SuiteSparse_long*>(S->i)[k] = A.innerIndexPtr()[k];
-    static_cast<double*>(S->x)[k] = A.valuePtr()[k];
-  }
-  return S;
-}
-}  // namespace
 
 TEST_CASE("The two-thread supernodal factorisation equals CHOLMOD's and reports a pivot that is not positive",
           "[core][solver]") {
@@ -222,7 +227,7 @@ TEST_CASE("The two-thread supernodal factorisation equals CHOLMOD's and reports 
   cholmod_common common;
   cholmod_l_start(&common);
   common.supernodal = CHOLMOD_SUPERNODAL;
-  cholmod_sparse* S = both_triangles(A, common);
+  cholmod_sparse* S = to_cholmod(A, common);
   cholmod_factor* reference = cholmod_l_analyze(S, &common);
   REQUIRE(reference);
   REQUIRE(reference->is_super);
@@ -242,13 +247,13 @@ TEST_CASE("The two-thread supernodal factorisation equals CHOLMOD's and reports 
   // A refactorisation with new values on the same structure.
   SparseMatrix A2 = A;
   A2.coeffs() *= 3.0;
-  cholmod_sparse* S2 = both_triangles(A2, common);
+  cholmod_sparse* S2 = to_cholmod(A2, common);
   REQUIRE(factorize_supernodal(S2, L).status == SupernodalFactorisationResult::kDone);
   CHECK((got - std::sqrt(3.0) * expected).cwiseAbs().maxCoeff() <= 1e-12 * expected.cwiseAbs().maxCoeff());
   // Shifted below its smallest eigenvalue but not its largest: indefinite. CHOLMOD fails too.
   SparseMatrix shifted = A;
   shifted.diagonal().array() -= 0.5 * shifted.diagonal().mean();
-  cholmod_sparse* S3 = both_triangles(shifted, common);
+  cholmod_sparse* S3 = to_cholmod(shifted, common);
   const auto failed = factorize_supernodal(S3, L);
   CHECK(failed.status == SupernodalFactorisationResult::kNotPositiveDefinite);
   CHECK(failed.column >= 0);
@@ -257,16 +262,8 @@ TEST_CASE("The two-thread supernodal factorisation equals CHOLMOD's and reports 
   CHECK(common.status == CHOLMOD_NOT_POSDEF);
   // An entry outside the analysed pattern is named (CHOLMOD would drop it): a tridiagonal matrix on the
   // analysis of a diagonal one.
-  SparseMatrix diagonal(50, 50), tridiagonal(50, 50);
-  for (int i = 0; i < 50; ++i) {
-    diagonal.insert(i, i) = 4;
-    tridiagonal.insert(i, i) = 4;
-    if (i > 0) tridiagonal.insert(i, i - 1) = tridiagonal.insert(i - 1, i) = -1;
-  }
-  diagonal.makeCompressed();
-  tridiagonal.makeCompressed();
-  cholmod_sparse* S4 = both_triangles(diagonal, common);
-  cholmod_sparse* S5 = both_triangles(tridiagonal, common);
+  cholmod_sparse* S4 = to_cholmod(band_matrix(50, 0), common);
+  cholmod_sparse* S5 = to_cholmod(band_matrix(50, 1), common);
   cholmod_factor* diagonal_factor = cholmod_l_analyze(S4, &common);
   REQUIRE(cholmod_l_change_factor(CHOLMOD_REAL, true, true, true, true, diagonal_factor, &common));
   CHECK(factorize_supernodal(S4, diagonal_factor).status == SupernodalFactorisationResult::kDone);
@@ -296,15 +293,9 @@ TEST_CASE("SparseSPDSolver::refactor reuses the analysis for new values on the s
   CHECK_THROWS_AS(solver.refactor(SparseMatrix(3, 3)), UsageError);
 #ifdef MSD_HAVE_CHOLMOD
   // An entry outside the factored pattern is refused (CHOLMOD's factorisation dropped it silently).
-  SparseMatrix diagonal(40, 40), tridiagonal(40, 40);
-  for (int i = 0; i < 40; ++i) {
-    diagonal.insert(i, i) = 4;
-    tridiagonal.insert(i, i) = 4;
-    if (i > 0) tridiagonal.insert(i, i - 1) = tridiagonal.insert(i - 1, i) = -1;
-  }
-  solver.factor(diagonal);
+  solver.factor(band_matrix(40, 0));
   try {
-    solver.refactor(tridiagonal);
+    solver.refactor(band_matrix(40, 1));
     FAIL("expected UsageError");
   } catch (const UsageError& e) {
     CHECK(std::string(e.what()).find("outside the sparsity pattern") != std::string::npos);

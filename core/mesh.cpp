@@ -147,14 +147,14 @@ MSD_AVX2 void fan_normals_x4(const double* px, const double* py, const double* p
   for (long g = g0; g < g1; ++g) {
     const int* r = ring + offsets[g];
     const int len = (offsets[g + 1] - offsets[g]) / 4;
-    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(vertices + 4 * g));
+    const int* v = vertices + 4 * g;
     const __m256d x = gather(px, v), y = gather(py, v), z = gather(pz, v);
-    __m128i j = _mm_loadu_si128(reinterpret_cast<const __m128i*>(r));
+    const int* j = r;
     __m256d ax = _mm256_sub_pd(gather(px, j), x), ay = _mm256_sub_pd(gather(py, j), y),
             az = _mm256_sub_pd(gather(pz, j), z);
     __m256d sx = _mm256_setzero_pd(), sy = sx, sz = sx;
     for (int t = 1; t < len; ++t) {
-      j = _mm_loadu_si128(reinterpret_cast<const __m128i*>(r + 4 * t));
+      j = r + 4 * t;
       const __m256d bx = _mm256_sub_pd(gather(px, j), x), by = _mm256_sub_pd(gather(py, j), y),
                     bz = _mm256_sub_pd(gather(pz, j), z);
       sx = _mm256_add_pd(sx, _mm256_sub_pd(_mm256_mul_pd(ay, bz), _mm256_mul_pd(az, by)));

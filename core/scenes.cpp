@@ -40,25 +40,19 @@ int closest_level(double target, Count count) {
   return best;
 }
 
-// Interleaves the bits of two 21-bit integers (Z-order / Morton code).
-std::uint64_t morton(std::uint32_t a, std::uint32_t b) {
-  std::uint64_t code = 0;
-  for (int bit = 0; bit < 21; ++bit)
-    code |= ((std::uint64_t(a) >> bit) & 1) << (2 * bit) | ((std::uint64_t(b) >> bit) & 1) << (2 * bit + 1);
-  return code;
-}
-
-// Renumbers the fine vertices in Z-order of their surface coordinates (u, v) ∈ [0, 1]², and sorts the faces
-// by their first vertex, so that mesh neighbours are near each other in memory. OpenSubdiv numbers a
+// Renumbers the fine vertices row by row of their surface coordinates (v, then u, in [0, 1]²), and sorts the
+// faces by their first vertex, so that mesh neighbours are near each other in memory. OpenSubdiv numbers a
 // level's vertices by their parent entity (all vertex children, then all edge children), which scatters
 // every one-ring over the whole array: per-vertex kernels then run several times slower at 1M vertices.
+// Rows rather than a Z-order curve: a frame pass then reads three rows at a time, which the prefetchers
+// stream (at 1M vertices the normals took 3.5 instead of 5.5 ms, the fold count 3.4 instead of 5.2 ms).
 void renumber_for_locality(Scene& s, const Eigen::MatrixX2d& uv) {
   const Eigen::Index nv = s.smooth.rows();
   std::vector<std::pair<std::uint64_t, int>> keys(nv);
   const double scale = double((1u << 21) - 1);
   for (Eigen::Index i = 0; i < nv; ++i) {
     const auto q = [&](double t) { return static_cast<std::uint32_t>(std::clamp(t, 0.0, 1.0) * scale); };
-    keys[i] = {morton(q(uv(i, 0)), q(uv(i, 1))), static_cast<int>(i)};
+    keys[i] = {std::uint64_t(q(uv(i, 1))) << 32 | q(uv(i, 0)), static_cast<int>(i)};
   }
   std::sort(keys.begin(), keys.end());
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> perm(nv);  // old index → new index

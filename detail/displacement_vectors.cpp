@@ -9,6 +9,7 @@
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
+#include "msdeform/core/vector_kernels.h"
 #include "msdeform/detail/phong.h"
 
 namespace msd {
@@ -21,6 +22,70 @@ constexpr double kMinTangentFraction = 1e-6;
 constexpr double kMinAreaFraction = TriangleCotangents::kDegenerateAreaRatio;
 // A vertex normal sum shorter than this fraction of its terms' total length has cancelled: no direction.
 constexpr double kMinNormalFraction = 1e-12;
+
+// visit_frames' face pass for the face with corners t = (a, b, c): its normal (p_b − p_a) × (p_c − p_a), of
+// length 2 · area, and that length into out[0..3], or zeros for a zero-area face. Written out term by term so
+// that face_normals_x4 can do the same operations.
+inline void face_normal(const phong::Columns& X, const int* t, double* out) {
+  const int a = t[0], b = t[1], c = t[2];
+  const double ux = X.x[b] - X.x[a], uy = X.y[b] - X.y[a], uz = X.z[b] - X.z[a];
+  const double vx = X.x[c] - X.x[a], vy = X.y[c] - X.y[a], vz = X.z[c] - X.z[a];
+  const double wx = X.x[c] - X.x[b], wy = X.y[c] - X.y[b], wz = X.z[c] - X.z[b];
+  const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+  const double longest2 = std::max(std::max(ux * ux + uy * uy + uz * uz, wx * wx + wy * wy + wz * wz),
+                                   vx * vx + vy * vy + vz * vz);
+  const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+  const bool area = len > kMinAreaFraction * 2 * longest2;
+  out[0] = area ? nx : 0.0, out[1] = area ? ny : 0.0, out[2] = area ? nz : 0.0, out[3] = area ? len : 0.0;
+}
+
+#if MSD_HAVE_AVX2_KERNELS
+// Coordinate x at corner c of faces f[0..3] of F (#F by 3, row-major), from four scalar loads (see gather()).
+MSD_AVX2 inline __m256d corner_x4(const double* x, const int* F, int c, const long* f) {
+  return _mm256_set_pd(x[F[3 * f[3] + c]], x[F[3 * f[2] + c]], x[F[3 * f[1] + c]], x[F[3 * f[0] + c]]);
+}
+MSD_AVX2 inline __m256d square_sum_x4(__m256d x, __m256d y, __m256d z) {
+  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)), _mm256_mul_pd(z, z));
+}
+MSD_AVX2 inline __m256d max_x4(__m256d a, __m256d b) {  // std::max(a, b): a < b ? b : a
+  return _mm256_blendv_pd(a, b, _mm256_cmp_pd(a, b, _CMP_LT_OQ));
+}
+// face_normal for faces [k0, k1) of `list` (face k when null), four at a time, lane by lane with the same
+// operations (no fused multiply-add), so the same bits; the rows stored by a 4×4 transpose.
+MSD_AVX2 void face_normals_x4(const phong::Columns& X, const int* F, const int* list, long k0, long k1, double* out) {
+  long k = k0;
+  for (; k + 4 <= k1; k += 4) {
+    long f[4];
+    for (int i = 0; i < 4; ++i) f[i] = list ? list[k + i] : k + i;
+    const __m256d ax = corner_x4(X.x, F, 0, f), ay = corner_x4(X.y, F, 0, f), az = corner_x4(X.z, F, 0, f);
+    const __m256d bx = corner_x4(X.x, F, 1, f), by = corner_x4(X.y, F, 1, f), bz = corner_x4(X.z, F, 1, f);
+    const __m256d cx = corner_x4(X.x, F, 2, f), cy = corner_x4(X.y, F, 2, f), cz = corner_x4(X.z, F, 2, f);
+    const __m256d ux = _mm256_sub_pd(bx, ax), uy = _mm256_sub_pd(by, ay), uz = _mm256_sub_pd(bz, az);
+    const __m256d vx = _mm256_sub_pd(cx, ax), vy = _mm256_sub_pd(cy, ay), vz = _mm256_sub_pd(cz, az);
+    const __m256d wx = _mm256_sub_pd(cx, bx), wy = _mm256_sub_pd(cy, by), wz = _mm256_sub_pd(cz, bz);
+    __m256d nx = _mm256_sub_pd(_mm256_mul_pd(uy, vz), _mm256_mul_pd(uz, vy));
+    __m256d ny = _mm256_sub_pd(_mm256_mul_pd(uz, vx), _mm256_mul_pd(ux, vz));
+    __m256d nz = _mm256_sub_pd(_mm256_mul_pd(ux, vy), _mm256_mul_pd(uy, vx));
+    const __m256d longest2 = max_x4(max_x4(square_sum_x4(ux, uy, uz), square_sum_x4(wx, wy, wz)),
+                                    square_sum_x4(vx, vy, vz));
+    __m256d len = _mm256_sqrt_pd(square_sum_x4(nx, ny, nz));
+    const __m256d area =
+        _mm256_cmp_pd(len, _mm256_mul_pd(_mm256_set1_pd(kMinAreaFraction * 2), longest2), _CMP_GT_OQ);
+    nx = _mm256_and_pd(nx, area), ny = _mm256_and_pd(ny, area), nz = _mm256_and_pd(nz, area);
+    len = _mm256_and_pd(len, area);
+    const __m256d t0 = _mm256_unpacklo_pd(nx, ny), t1 = _mm256_unpackhi_pd(nx, ny);
+    const __m256d t2 = _mm256_unpacklo_pd(nz, len), t3 = _mm256_unpackhi_pd(nz, len);
+    _mm256_storeu_pd(out + 4 * f[0], _mm256_permute2f128_pd(t0, t2, 0x20));
+    _mm256_storeu_pd(out + 4 * f[1], _mm256_permute2f128_pd(t1, t3, 0x20));
+    _mm256_storeu_pd(out + 4 * f[2], _mm256_permute2f128_pd(t0, t2, 0x31));
+    _mm256_storeu_pd(out + 4 * f[3], _mm256_permute2f128_pd(t1, t3, 0x31));
+  }
+  for (; k < k1; ++k) {
+    const long f = list ? list[k] : k;
+    face_normal(X, F + 3 * f, out + 4 * f);
+  }
+}
+#endif
 
 }  // namespace
 
@@ -78,18 +143,14 @@ void VertexFrames::visit_frames(const Positions& P, Visit visit, const std::vect
   const phong::Columns X(P);
   double* const face_normals = face_normals_.data();
   // Per face: the normal of length 2 · area (area weighting), or zero for a zero-area face, and its length.
+  const int* const F = F_.data();  // row-major
   parallel_for_chunks(nf, [&](long begin, long end) {
+#if MSD_HAVE_AVX2_KERNELS
+    if (cpu_has_avx2()) return face_normals_x4(X, F, face_list, begin, end, face_normals);
+#endif
     for (long k = begin; k < end; ++k) {
       const long f = face_list ? face_list[k] : k;
-      const Vec3 p0 = X.row(F_(f, 0)), p1 = X.row(F_(f, 1)), p2 = X.row(F_(f, 2));
-      const Vec3 n = (p1 - p0).cross(p2 - p0);
-      const double longest2 =
-          std::max({(p1 - p0).squaredNorm(), (p2 - p1).squaredNorm(), (p0 - p2).squaredNorm()});
-      const double len = n.norm();
-      const bool area = len > kMinAreaFraction * 2 * longest2;
-      double* out = face_normals + 4 * f;
-      out[0] = area ? n.x() : 0.0, out[1] = area ? n.y() : 0.0, out[2] = area ? n.z() : 0.0;
-      out[3] = area ? len : 0.0;
+      face_normal(X, F + 3 * f, face_normals + 4 * f);
     }
   });
   parallel_for_chunks(nv, [&](long begin, long end) {

@@ -33,8 +33,8 @@ inline bool cpu_has_avx2() {
 }
 
 #if MSD_HAVE_AVX2_KERNELS
-//! x[index[0..3]] from four scalar loads: AMD's cores run vgatherdpd as microcode, several times slower
-//! than the loads it replaces (on Intel's the two are about equal).
+//! x[index[0..3]] from four scalar loads. AMD's cores run vgatherdpd as microcode: on the development
+//! machine's EPYC the gathers made the 1M-vertex normals 11.5 ms, the scalar loads 4.4–5.0 ms.
 MSD_AVX2 inline __m256d gather(const double* x, const int* index) {
   return _mm256_set_pd(x[index[3]], x[index[2]], x[index[1]], x[index[0]]);
 }

@@ -229,7 +229,8 @@ struct SparseSPDSolver::Impl {
 
 std::string SparseSPDSolver::backend() {
   const std::string kernels = blas_kernels();
-  return kernels.empty() ? "CHOLMOD supernodal" : "CHOLMOD supernodal, OpenBLAS " + kernels + " kernels";
+  const std::string name = "CHOLMOD AMD and supernodal analysis, two-thread supernodal factorisation";
+  return kernels.empty() ? name : name + ", OpenBLAS " + kernels + " kernels";
 }
 
 #else

@@ -57,8 +57,9 @@ class SparseSPDSolver {
   //! ordering where SupernodalSubstitution solves, else 0, 1, …, n − 1. Empty before factor().
   const std::vector<int>& ordering() const;
 
-  //! Which backend this build uses: "CHOLMOD supernodal" (with the OpenBLAS kernels in use, e.g.
-  //! "CHOLMOD supernodal, OpenBLAS SkylakeX kernels") or "Eigen SimplicialLDLT".
+  //! Which backend this build uses: "CHOLMOD AMD and supernodal analysis, two-thread supernodal
+  //! factorisation" (CHOLMOD orders and analyses, core/supernodal_factorisation.h factors; with the
+  //! OpenBLAS kernels in use appended, e.g. ", OpenBLAS SkylakeX kernels") or "Eigen SimplicialLDLT".
   static std::string backend();
   //! Non-zeros of the Cholesky factor (fill-in measure), 0 before factor().
   double factor_nonzeros() const;

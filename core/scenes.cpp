@@ -67,7 +67,9 @@ void renumber_for_locality(Scene& s, const Eigen::MatrixX2d& uv) {
     for (int k = 0; k < 3; ++k) F(f, k) = perm.indices()[F(f, k)];
   std::vector<int> order(F.rows());
   for (Eigen::Index f = 0; f < F.rows(); ++f) order[f] = static_cast<int>(f);
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return F.row(a).minCoeff() < F.row(b).minCoeff(); });
+  // Stable: faces that share their first vertex keep OpenSubdiv's order, the same with any standard library
+  // (the local frames' tangents follow the face order).
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return F.row(a).minCoeff() < F.row(b).minCoeff(); });
   Faces sorted(F.rows(), 3);
   for (Eigen::Index f = 0; f < F.rows(); ++f) sorted.row(f) = F.row(order[f]);
   F = sorted;

@@ -90,7 +90,8 @@ SparseMatrix grid_laplacian(int n) {
     if (interior[v]) inner.push_back(v);
   return submatrix(SparseMatrix(-cotan_laplacian(P, F).W), inner, inner);
 }
-// n×n, 4 on the diagonal and -1 on the `bandwidth` diagonals on either side: positive definite.
+// n×n, 4 on the diagonal and -1 on the `bandwidth` diagonals on either side: diagonally dominant, so positive
+// definite, for bandwidth <= 2.
 SparseMatrix band_matrix(int n, int bandwidth) {
   std::vector<Eigen::Triplet<double>> entries;
   for (int i = 0; i < n; ++i)

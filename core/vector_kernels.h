@@ -38,6 +38,11 @@ inline bool cpu_has_avx2() {
 MSD_AVX2 inline __m256d gather(const double* x, const int* index) {
   return _mm256_set_pd(x[index[3]], x[index[2]], x[index[1]], x[index[0]]);
 }
+
+//! (x² + y²) + z² lane by lane: Eigen's squaredNorm() of a 3-vector, in the same order.
+MSD_AVX2 inline __m256d square_sum_x4(__m256d x, __m256d y, __m256d z) {
+  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)), _mm256_mul_pd(z, z));
+}
 #endif
 
 }  // namespace msd

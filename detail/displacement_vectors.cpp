@@ -44,9 +44,6 @@ inline void face_normal(const phong::Columns& X, const int* t, double* out) {
 MSD_AVX2 inline __m256d corner_x4(const double* x, const int* F, int c, const long* f) {
   return _mm256_set_pd(x[F[3 * f[3] + c]], x[F[3 * f[2] + c]], x[F[3 * f[1] + c]], x[F[3 * f[0] + c]]);
 }
-MSD_AVX2 inline __m256d square_sum_x4(__m256d x, __m256d y, __m256d z) {
-  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)), _mm256_mul_pd(z, z));
-}
 MSD_AVX2 inline __m256d max_x4(__m256d a, __m256d b) {  // std::max(a, b): a < b ? b : a
   return _mm256_blendv_pd(a, b, _mm256_cmp_pd(a, b, _CMP_LT_OQ));
 }

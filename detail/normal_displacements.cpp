@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstddef>
 #include <string>
+
+#include <limits>
 
 #include "msdeform/core/errors.h"
 #include "msdeform/core/parallel.h"
-#include <limits>
-
+#include "msdeform/core/vector_kernels.h"
 #include "msdeform/detail/closest_point.h"
 #include "msdeform/detail/phong.h"
 
@@ -149,6 +151,80 @@ struct BasePointSearch {
     return Newton::Step;
   }
 };
+
+// S'(v) = B'(w) + h n(w) for one sample (seed 9.3.2): the frame loop of reconstruct(). check gains
+// x − x for each coordinate x written: 0 while they are finite, NaN from the first that is not.
+template <class Sample>
+inline void reconstruct_sample(const Sample& s, const phong::Columns& B, const phong::Rows& N, double* ox,
+                               double* oy, double* oz, double& check) {
+  const Vec3 w(s.w[0], s.w[1], s.w[2]);
+  const Vec3 p = phong::interpolate(B, s.corner, w) + s.h * phong::direction(B, N, s.corner, w);
+  ox[s.vertex] = p.x();
+  oy[s.vertex] = p.y();
+  oz[s.vertex] = p.z();
+  check += (p.x() - p.x()) + (p.y() - p.y()) + (p.z() - p.z());
+}
+
+#if MSD_HAVE_AVX2_KERNELS
+// Σ_k w_k X(corner_k) of four samples, one coordinate: the scalar interpolation's operations per lane.
+// (Lambdas would not inherit the target attribute: helpers are functions.)
+template <class Sample>
+MSD_AVX2 inline __m256d corner_x4(const Sample* s, const double* x, long stride, int k) {
+  return _mm256_set_pd(x[stride * s[3].corner[k]], x[stride * s[2].corner[k]], x[stride * s[1].corner[k]],
+                       x[stride * s[0].corner[k]]);
+}
+template <class Sample>
+MSD_AVX2 inline __m256d interpolate_x4(const Sample* s, const double* x, long stride, __m256d w0, __m256d w1,
+                                       __m256d w2) {
+  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(w0, corner_x4(s, x, stride, 0)),
+                                     _mm256_mul_pd(w1, corner_x4(s, x, stride, 1))),
+                       _mm256_mul_pd(w2, corner_x4(s, x, stride, 2)));
+}
+
+// reconstruct_sample() for samples [begin, end), four at a time with the same operations in each lane, so
+// the bits are the same. A group whose interpolated normal is too short in some lane (the face-normal
+// fallback of phong::direction) runs through reconstruct_sample().
+template <class Sample>
+MSD_AVX2 void reconstruct_samples_x4(const Sample* samples, long begin, long end, const phong::Columns& B,
+                                     const phong::Rows& N, double* ox, double* oy, double* oz, double& check) {
+  static_assert(offsetof(Sample, h) == offsetof(Sample, w) + 3 * sizeof(double), "w and h are read as one row");
+  __m256d checks = _mm256_setzero_pd();
+  const __m256d min_length = _mm256_set1_pd(phong::kMinNormalLength);
+  long k = begin;
+  for (; k + 4 <= end; k += 4) {
+    const Sample* s = samples + k;
+    // (w0, w1, w2, h) of the four samples, transposed.
+    const __m256d r0 = _mm256_loadu_pd(s[0].w), r1 = _mm256_loadu_pd(s[1].w);
+    const __m256d r2 = _mm256_loadu_pd(s[2].w), r3 = _mm256_loadu_pd(s[3].w);
+    const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+    const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+    const __m256d w0 = _mm256_permute2f128_pd(t0, t2, 0x20), w1 = _mm256_permute2f128_pd(t1, t3, 0x20);
+    const __m256d w2 = _mm256_permute2f128_pd(t0, t2, 0x31), h = _mm256_permute2f128_pd(t1, t3, 0x31);
+    const __m256d mx = interpolate_x4(s, N.p, 3, w0, w1, w2), my = interpolate_x4(s, N.p + 1, 3, w0, w1, w2),
+                  mz = interpolate_x4(s, N.p + 2, 3, w0, w1, w2);
+    const __m256d length = _mm256_sqrt_pd(square_sum_x4(mx, my, mz));
+    if (_mm256_movemask_pd(_mm256_cmp_pd(length, min_length, _CMP_GT_OQ)) != 0xF) {
+      for (int i = 0; i < 4; ++i) reconstruct_sample(s[i], B, N, ox, oy, oz, check);
+      continue;
+    }
+    const __m256d px = _mm256_add_pd(interpolate_x4(s, B.x, 1, w0, w1, w2), _mm256_mul_pd(h, _mm256_div_pd(mx, length)));
+    const __m256d py = _mm256_add_pd(interpolate_x4(s, B.y, 1, w0, w1, w2), _mm256_mul_pd(h, _mm256_div_pd(my, length)));
+    const __m256d pz = _mm256_add_pd(interpolate_x4(s, B.z, 1, w0, w1, w2), _mm256_mul_pd(h, _mm256_div_pd(mz, length)));
+    checks = _mm256_add_pd(checks, _mm256_add_pd(_mm256_add_pd(_mm256_sub_pd(px, px), _mm256_sub_pd(py, py)),
+                                                 _mm256_sub_pd(pz, pz)));
+    alignas(32) double x[4], y[4], z[4];
+    _mm256_store_pd(x, px), _mm256_store_pd(y, py), _mm256_store_pd(z, pz);
+    for (int i = 0; i < 4; ++i) {
+      const int v = s[i].vertex;
+      ox[v] = x[i], oy[v] = y[i], oz[v] = z[i];
+    }
+  }
+  alignas(32) double lanes[4];
+  _mm256_store_pd(lanes, checks);
+  check += (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+  for (; k < end; ++k) reconstruct_sample(samples[k], B, N, ox, oy, oz, check);
+}
+#endif
 
 }  // namespace
 
@@ -305,15 +381,14 @@ void NormalDisplacements::reconstruct(const Positions& B_deformed, Positions& ou
   // Samples run in face order, so consecutive reads of B' stay close in memory.
   parallel_for_chunks(static_cast<long>(samples_.size()), [&](long begin, long end) {
     double check = 0;  // x − x is 0 for a finite x, NaN otherwise: one test per chunk
-    for (long k = begin; k < end; ++k) {
-      const Sample& s = samples_[k];
-      const Vec3 w(s.w[0], s.w[1], s.w[2]);
-      const Vec3 p = phong::interpolate(Bc, s.corner, w) + s.h * phong::direction(Bc, Nc, s.corner, w);
-      ox[s.vertex] = p.x();
-      oy[s.vertex] = p.y();
-      oz[s.vertex] = p.z();
-      check += (p.x() - p.x()) + (p.y() - p.y()) + (p.z() - p.z());
+#if MSD_HAVE_AVX2_KERNELS
+    if (cpu_has_avx2()) {
+      reconstruct_samples_x4(samples_.data(), begin, end, Bc, Nc, ox, oy, oz, check);
+      if (!(check == 0)) finite = false;
+      return;
     }
+#endif
+    for (long k = begin; k < end; ++k) reconstruct_sample(samples_[k], Bc, Nc, ox, oy, oz, check);
     if (!(check == 0)) finite = false;
   });
   if (!finite) {

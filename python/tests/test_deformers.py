@@ -421,3 +421,17 @@ def test_needles_and_zero_area_faces_move_with_their_neighbours(lift, name, opti
     out = d.deform(T)
     assert np.isfinite(out).all()
     assert np.linalg.norm(out[w] - out[v]) <= 0.02 * np.linalg.norm(out[v] - V2[v])
+
+
+def test_retain_freed_memory_serves_large_arrays_from_the_heap(lift):
+    # glibc maps a 64 MB block on its own (mmap) by default; after the call it comes from the heap, which
+    # keeps it for reuse once freed. Process-wide: the tests after this one run as the msdeform tool does.
+    msdeform.retain_freed_memory()
+    block = np.ones(8 << 20)
+    with open("/proc/self/maps") as maps:
+        heap = [tuple(int(a, 16) for a in line.split()[0].split("-")) for line in maps if line.rstrip().endswith("[heap]")]
+    assert any(lo <= block.ctypes.data < hi for lo, hi in heap)
+    V, F, labels, transforms = lift
+    shell = msdeform.Deformer("shell")
+    shell.prepare(V, F, labels)
+    assert np.isfinite(shell.deform(transforms)).all()

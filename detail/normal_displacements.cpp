@@ -4,9 +4,8 @@
 #include <atomic>
 #include <cmath>
 #include <cstddef>
-#include <string>
-
 #include <limits>
+#include <string>
 
 #include "msdeform/core/errors.h"
 #include "msdeform/core/parallel.h"
@@ -207,9 +206,13 @@ MSD_AVX2 void reconstruct_samples_x4(const Sample* samples, long begin, long end
       for (int i = 0; i < 4; ++i) reconstruct_sample(s[i], B, N, ox, oy, oz, check);
       continue;
     }
-    const __m256d px = _mm256_add_pd(interpolate_x4(s, B.x, 1, w0, w1, w2), _mm256_mul_pd(h, _mm256_div_pd(mx, length)));
-    const __m256d py = _mm256_add_pd(interpolate_x4(s, B.y, 1, w0, w1, w2), _mm256_mul_pd(h, _mm256_div_pd(my, length)));
-    const __m256d pz = _mm256_add_pd(interpolate_x4(s, B.z, 1, w0, w1, w2), _mm256_mul_pd(h, _mm256_div_pd(mz, length)));
+    // b' + h (m / |m|), coordinate by coordinate.
+    const __m256d px = _mm256_add_pd(interpolate_x4(s, B.x, 1, w0, w1, w2),
+                                     _mm256_mul_pd(h, _mm256_div_pd(mx, length)));
+    const __m256d py = _mm256_add_pd(interpolate_x4(s, B.y, 1, w0, w1, w2),
+                                     _mm256_mul_pd(h, _mm256_div_pd(my, length)));
+    const __m256d pz = _mm256_add_pd(interpolate_x4(s, B.z, 1, w0, w1, w2),
+                                     _mm256_mul_pd(h, _mm256_div_pd(mz, length)));
     checks = _mm256_add_pd(checks, _mm256_add_pd(_mm256_add_pd(_mm256_sub_pd(px, px), _mm256_sub_pd(py, py)),
                                                  _mm256_sub_pd(pz, pz)));
     alignas(32) double x[4], y[4], z[4];

@@ -50,8 +50,8 @@ from ._msdeform import (  # noqa: E402
     ReferenceDistance, RigidityError, SolverError, Stats, TopologyError, UsageError, blas_kernels,
     bounding_box_diagonal, build_info, count_self_intersections, detail_distortion, distance_to_reference,
     handle_error, library_version, method_options, read_def, read_dmat_groups, read_mesh, read_sel, read_soup,
-    retain_freed_memory, rigidity_error, scene_names, select_blas_kernels, select_box, select_halfspace, select_sphere,
-    self_intersections, vertex_normals, volume, volume_change, write_def, write_mesh, write_sel,
+    retain_freed_memory, rigidity_error, scene_names, select_blas_kernels, select_box, select_halfspace,
+    select_sphere, self_intersections, vertex_normals, volume, volume_change, write_def, write_mesh, write_sel,
 )
 from ._helpers import (  # noqa: E402
     Edit, MethodInfo, constrained_vertices, handle_vertices, identity, load_edit, methods, region, rotation,

@@ -429,7 +429,8 @@ def test_retain_freed_memory_serves_large_arrays_from_the_heap(lift):
     msdeform.retain_freed_memory()
     block = np.ones(8 << 20)
     with open("/proc/self/maps") as maps:
-        heap = [tuple(int(a, 16) for a in line.split()[0].split("-")) for line in maps if line.rstrip().endswith("[heap]")]
+        heap = [tuple(int(a, 16) for a in line.split()[0].split("-"))
+                for line in maps if line.rstrip().endswith("[heap]")]
     assert any(lo <= block.ctypes.data < hi for lo, hi in heap)
     V, F, labels, transforms = lift
     shell = msdeform.Deformer("shell")

@@ -743,11 +743,12 @@ PYBIND11_MODULE(_msdeform, m) {
   m.def("blas_kernels", &msd::blas_kernels,
         "The OpenBLAS kernels CHOLMOD runs on (e.g. 'SkylakeX', 'Prescott'), or '' for another BLAS.");
   m.def("retain_freed_memory", &msd::retain_freed_memory,
-        "Makes glibc's malloc keep freed memory for reuse (large blocks from the heap, the heap never trimmed "
-        "below 1 GiB) instead of returning it to the system, so that the large temporaries of prepare() are not "
-        "page-faulted in anew each time. Measured on the 1M-vertex bumpy plane's shell prepare: 12.5 s without, "
-        "3.9 s with (the msdeform tool always runs with it). The price: the process's resident size no longer "
-        "shrinks after a peak. Process-wide (numpy's large arrays too) and opt-in: call it once after import.");
+        "Makes glibc's malloc keep freed memory for reuse instead of returning it to the system: large blocks "
+        "come from the heap, and up to 1 GiB of free heap top stays mapped (beyond that glibc trims it back to "
+        "256 MiB). The large temporaries of prepare() are then not page-faulted in anew each time. Measured on "
+        "the 1M-vertex bumpy plane's shell prepare (scene 'lift'): 12.5 s without, 3.9 s with (the msdeform tool "
+        "always runs with it). The price: after a peak the process's resident size stays up to 1 GiB above what "
+        "it uses. Process-wide (numpy's large arrays too) and opt-in: call it once after import.");
   m.def("build_info", &msd::build_info,
         "How the library was built: the sparse Cholesky in use, Eigen's version and alignment, the CPU target.");
   msdpy::register_exceptions(m);

@@ -456,3 +456,20 @@ TEST_CASE("multiscale: the frame's fold count equals a count over every triangle
   }
   CHECK(folds_seen > 100);  // the turned handles fold 127 (lift) and 60 (bend120) triangles
 }
+
+TEST_CASE("multiscale: a base deformer failing on a degenerate input names the input, not only the base",
+          "[reconstruction][multiscale][bad-input]") {
+  // A patch of free vertices squashed onto a line: its triangles have no area, in S and so in its base.
+  Scene s = scene("lift");
+  const Vec3 centre(0.5, 0.5, 0);
+  int squashed = 0;
+  for (Eigen::Index v = 0; v < s.P.rows(); ++v)
+    if (s.region.code(static_cast<int>(v)) == Region::kFree &&
+        (Vec3(s.P(v, 0), s.P(v, 1), 0) - centre).norm() < 0.08)
+      s.P(v, 1) = centre.y(), s.P(v, 2) = 0, ++squashed;
+  REQUIRE(squashed > 20);
+  CHECK_THROWS_AS(ShellDeformer().prepare(s.P, s.F, s.region), SolverError);  // the input itself is singular
+  MultiscaleDeformer ms;
+  CHECK_THROWS_WITH(ms.prepare(s.P, s.F, s.region),
+                    Contains("failed on the") && Contains("repair") && !Contains("not the input mesh"));
+}

@@ -11,12 +11,12 @@ std::uint64_t physical_memory();
 
 //! Makes glibc's malloc keep freed memory for reuse instead of returning it to the system: large blocks
 //! come from the heap rather than fresh mmap()s, and up to 1 GiB of free heap top stays mapped (beyond
-//! that glibc trims it back to 256 MiB). CHOLMOD, OpenBLAS and
-//! Eigen allocate and free big temporaries many times during a factorisation; with the default
-//! settings every one of them is page-faulted in anew. Measured on the 1M-vertex bi-Laplacian (2 cores):
-//! factorisation 9.7 s -> 6.2 s, assembly 2.0 s -> 1.1 s. The price: after a peak the process's resident size
-//! stays up to 1 GiB above what it uses. Call once at program start (the msdeform tool and the benchmarks do); a library
-//! never calls it on its own.
+//! that glibc trims it back to 256 MiB). CHOLMOD, OpenBLAS and Eigen allocate and free big temporaries
+//! many times during a factorisation; with the default settings every one of them is page-faulted in
+//! anew. Measured on the 1M-vertex bi-Laplacian (2 cores): factorisation 9.7 s -> 6.2 s, assembly 2.0 s
+//! -> 1.1 s. The price: after a peak the process's resident size stays up to 1 GiB above what it uses.
+//! Call once at program start (the msdeform tool and the benchmarks do); a library never calls it on its
+//! own (Python scripts may, with msdeform.retain_freed_memory()).
 void retain_freed_memory();
 
 }  // namespace msd

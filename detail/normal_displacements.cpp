@@ -385,13 +385,11 @@ void NormalDisplacements::reconstruct(const Positions& B_deformed, Positions& ou
   parallel_for_chunks(static_cast<long>(samples_.size()), [&](long begin, long end) {
     double check = 0;  // x − x is 0 for a finite x, NaN otherwise: one test per chunk
 #if MSD_HAVE_AVX2_KERNELS
-    if (cpu_has_avx2()) {
+    if (cpu_has_avx2())
       reconstruct_samples_x4(samples_.data(), begin, end, Bc, Nc, ox, oy, oz, check);
-      if (!(check == 0)) finite = false;
-      return;
-    }
+    else
 #endif
-    for (long k = begin; k < end; ++k) reconstruct_sample(samples_[k], Bc, Nc, ox, oy, oz, check);
+      for (long k = begin; k < end; ++k) reconstruct_sample(samples_[k], Bc, Nc, ox, oy, oz, check);
     if (!(check == 0)) finite = false;
   });
   if (!finite) {

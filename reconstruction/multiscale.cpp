@@ -50,12 +50,11 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
   } catch (const InvalidInput& e) {  // a refusal of the mesh's structure (a fan too large to factor): S's too
     throw InvalidInput(name_ + ": the base deformer " + base_deformer_->name() + " on the base B: " + e.what());
   } catch (const Error& e) {  // a numerical or topological failure: of B, or of S that B inherited
-    if (d.base_is_input)
-      throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on the input mesh "
-                        "(the base is the mesh itself here); it is degenerate there, repair it: " + e.what());
-    throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on the base B. Where "
-                      "the input mesh is degenerate too (the method alone fails on it), repair the input; "
-                      "otherwise the base is, and a smaller detail scale may help: " + e.what());
+    const char* cause = d.base_is_input
+                            ? "the input mesh (the base is the mesh itself here); it is degenerate there, repair it: "
+                            : "the base B. Where the input mesh is degenerate too (the method alone fails on it), "
+                              "repair the input; otherwise the base is, and a smaller detail scale may help: ";
+    throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on " + cause + e.what());
   }
   // B has S's outliers: Deformer::prepare has warned about them on S already.
   const auto about_outliers = [](const std::string& w) { return w.find(kOutlierWarning) != std::string::npos; };

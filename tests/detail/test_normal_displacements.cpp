@@ -418,10 +418,11 @@ TEST_CASE("normal displacements: every reconstructed vertex follows the seed's f
   // A bent base B' with a disc collapsed to one point: zero vertex and face normals there.
   Positions Bd = B;
   for (Eigen::Index i = 0; i < Bd.rows(); ++i) Bd(i, 2) += 0.3 * Bd(i, 0) * Bd(i, 0) - 0.1 * Bd(i, 1);
-  const Vec3 centre = Bd.row(Bd.rows() / 2);
+  const Eigen::Index middle = B.rows() / 2;
+  const Vec3 centre = Bd.row(middle);
   int collapsed = 0;
   for (Eigen::Index i = 0; i < Bd.rows(); ++i)
-    if ((Vec3(B.row(i)) - Vec3(B.row(B.rows() / 2))).norm() < 0.05) Bd.row(i) = centre, ++collapsed;
+    if ((B.row(i) - B.row(middle)).norm() < 0.05) Bd.row(i) = centre, ++collapsed;
   REQUIRE(collapsed >= 4);
   Positions out;
   nd.reconstruct(Bd, out);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <numeric>
@@ -13,6 +14,7 @@
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
+#include "msdeform/core/vector_kernels.h"
 #include "msdeform/detail/closest_point.h"
 #include "msdeform/detail/phong.h"
 
@@ -33,6 +35,82 @@ inline double dot_of_normals(const phong::Columns& A, const int* ta, const phong
          (ax * cy - ay * cx) * (ex * gy - ey * gx);
 }
 
+// A product of normals whose sign can be trusted: neither zero, subnormal nor overflowed.
+inline bool normal_range(double d) {
+  const double m = std::abs(d);
+  return m >= std::numeric_limits<double>::min() && m <= std::numeric_limits<double>::max();
+}
+
+// count()'s pass over stored triangles [begin, end): adds the folded ones to `folded` and those whose product
+// of normals is not in normal_range() (and that have a rest sign) to `unsure`.
+void count_folds(const phong::Columns& s, const int* fs, const phong::Columns& b, const int* fb, const int* ref,
+                 const signed char* rest, long begin, long end, int& folded, int& unsure) {
+  int n = 0, u = 0;
+  for (long f = begin; f < end; ++f) {
+    // Folded when the orientation changed sign: (n_S' · n_B') · rest < 0. Branch-free: a data-dependent
+    // branch per triangle (skip the uncounted ones, compare signs) costs half of the pass. A product
+    // that is zero, subnormal or not finite (a collapsed triangle, or sizes beyond 1e±77) is unsure.
+    const double d = dot_of_normals(s, fs + 3 * f, b, fb + 3 * (ref ? ref[f] : f));
+    n += d * rest[f] < 0;
+    u += (rest[f] != 0) & !normal_range(d);
+  }
+  folded += n, unsure += u;
+}
+
+#if MSD_HAVE_AVX2_KERNELS
+MSD_AVX2 inline __m256d cross(__m256d p, __m256d q, __m256d r, __m256d t) {  // p q − r t, lane by lane
+  return _mm256_sub_pd(_mm256_mul_pd(p, q), _mm256_mul_pd(r, t));
+}
+
+// count_folds four triangles at a time, each lane with dot_of_normals' operations in its order (no fused
+// multiply-add): the same products, so the same counts. On the 1M lift (1.26M triangles counted) the pass
+// took 2.7–2.8 ms, the scalar one 3.6–4.3 ms.
+MSD_AVX2 void count_folds_x4(const phong::Columns& s, const int* fs, const phong::Columns& b, const int* fb,
+                             const int* ref, const signed char* rest, long begin, long end, int& folded,
+                             int& unsure) {
+  const __m256d zero = _mm256_setzero_pd(), sign = _mm256_set1_pd(-0.0);
+  const __m256d smallest = _mm256_set1_pd(std::numeric_limits<double>::min());
+  const __m256d largest = _mm256_set1_pd(std::numeric_limits<double>::max());
+  int n = 0, u = 0;
+  long f = begin;
+  for (; f + 4 <= end; f += 4) {
+    int ia[3][4], ib[3][4];  // corner k of the four triangles of S' and of their base triangles
+    for (int i = 0; i < 4; ++i)
+      for (int k = 0; k < 3; ++k) ia[k][i] = fs[3 * (f + i) + k];
+    if (ref) {
+      for (int i = 0; i < 4; ++i)
+        for (int k = 0; k < 3; ++k) ib[k][i] = fb[3 * ref[f + i] + k];
+    } else {  // shared connectivity (fb is fs)
+      std::memcpy(ib, ia, sizeof ia);
+    }
+    const __m256d a0x = gather(s.x, ia[0]), a0y = gather(s.y, ia[0]), a0z = gather(s.z, ia[0]);
+    const __m256d ax = _mm256_sub_pd(gather(s.x, ia[1]), a0x), ay = _mm256_sub_pd(gather(s.y, ia[1]), a0y),
+                  az = _mm256_sub_pd(gather(s.z, ia[1]), a0z);
+    const __m256d cx = _mm256_sub_pd(gather(s.x, ia[2]), a0x), cy = _mm256_sub_pd(gather(s.y, ia[2]), a0y),
+                  cz = _mm256_sub_pd(gather(s.z, ia[2]), a0z);
+    const __m256d b0x = gather(b.x, ib[0]), b0y = gather(b.y, ib[0]), b0z = gather(b.z, ib[0]);
+    const __m256d ex = _mm256_sub_pd(gather(b.x, ib[1]), b0x), ey = _mm256_sub_pd(gather(b.y, ib[1]), b0y),
+                  ez = _mm256_sub_pd(gather(b.z, ib[1]), b0z);
+    const __m256d gx = _mm256_sub_pd(gather(b.x, ib[2]), b0x), gy = _mm256_sub_pd(gather(b.y, ib[2]), b0y),
+                  gz = _mm256_sub_pd(gather(b.z, ib[2]), b0z);
+    const __m256d d = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(cross(ay, cz, az, cy), cross(ey, gz, ez, gy)),
+                      _mm256_mul_pd(cross(az, cx, ax, cz), cross(ez, gx, ex, gz))),
+        _mm256_mul_pd(cross(ax, cy, ay, cx), cross(ex, gy, ey, gx)));
+    int packed;
+    std::memcpy(&packed, rest + f, 4);
+    const __m256d r = _mm256_cvtepi32_pd(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(packed)));
+    const __m256d m = _mm256_andnot_pd(sign, d);
+    const __m256d in_range =
+        _mm256_and_pd(_mm256_cmp_pd(m, smallest, _CMP_GE_OQ), _mm256_cmp_pd(m, largest, _CMP_LE_OQ));
+    n += __builtin_popcount(_mm256_movemask_pd(_mm256_cmp_pd(_mm256_mul_pd(d, r), zero, _CMP_LT_OQ)));
+    u += __builtin_popcount(_mm256_movemask_pd(_mm256_andnot_pd(in_range, _mm256_cmp_pd(r, zero, _CMP_NEQ_OQ))));
+  }
+  folded += n, unsure += u;
+  count_folds(s, fs, b, fb, ref, rest, f, end, folded, unsure);
+}
+#endif
+
 // The normal of triangle t of X scaled to a largest component of 1, from edges scaled the same way (no
 // overflow or underflow at any finite size); zero for a triangle that cotan_laplacian calls degenerate
 // (area below 1e-14 of its squared longest edge): its orientation is rounding noise.
@@ -46,12 +124,6 @@ Vec3 unit_scale_normal(const phong::Columns& X, const int* t) {
   const double longest2 = std::max({e1.squaredNorm(), e2.squaredNorm(), (e2 - e1).squaredNorm()});
   if (!(n.norm() > 2 * TriangleCotangents::kDegenerateAreaRatio * longest2)) return Vec3::Zero();
   return n / n.cwiseAbs().maxCoeff();
-}
-
-// A product of normals whose sign can be trusted: neither zero, subnormal nor overflowed.
-inline bool normal_range(double d) {
-  const double m = std::abs(d);
-  return m >= std::numeric_limits<double>::min() && m <= std::numeric_limits<double>::max();
 }
 
 // Sign of n_a · n_b (−1, 0 or 1), right at any finite size; 0 where either triangle is degenerate.
@@ -197,14 +269,12 @@ int FoldCheck::count(const Positions& S_deformed, const Positions& B_deformed,
   for_each_run([&](long first, long last) {
     parallel_for_chunks(last - first, [=, &folded, &unsure](long begin, long end) {
       int n = 0, u = 0;
-      for (long f = first + begin; f < first + end; ++f) {
-        // Folded when the orientation changed sign: (n_S' · n_B') · rest < 0. Branch-free: a data-dependent
-        // branch per triangle (skip the uncounted ones, compare signs) costs half of the pass. A product
-        // that is zero, subnormal or not finite (a collapsed triangle, or sizes beyond 1e±77) is unsure.
-        const double d = dot_of_normals(s, fs + 3 * f, b, fb + 3 * (ref ? ref[f] : f));
-        n += d * rest[f] < 0;
-        u += (rest[f] != 0) & !normal_range(d);
-      }
+#if MSD_HAVE_AVX2_KERNELS
+      if (cpu_has_avx2())
+        count_folds_x4(s, fs, b, fb, ref, rest, first + begin, first + end, n, u);
+      else
+#endif
+        count_folds(s, fs, b, fb, ref, rest, first + begin, first + end, n, u);
       folded += n;
       unsure += u;
     });

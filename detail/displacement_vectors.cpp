@@ -82,6 +82,116 @@ MSD_AVX2 void face_normals_x4(const phong::Columns& X, const int* F, const int* 
     face_normal(X, F + 3 * f, out + 4 * f);
   }
 }
+
+// VertexFrames' arrays, for the four-vertex loop below.
+struct FrameArrays {
+  const int *face_offsets, *incident_faces, *offsets, *neighbours;
+  const double* face_normals;
+};
+
+// a · b lane by lane in the order of Eigen's dot() of 3-vectors: (a_x b_x + a_y b_y) + a_z b_z.
+MSD_AVX2 inline __m256d dot_x4(__m256d ax, __m256d ay, __m256d az, __m256d bx, __m256d by, __m256d bz) {
+  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(ax, bx), _mm256_mul_pd(ay, by)), _mm256_mul_pd(az, bz));
+}
+MSD_AVX2 inline __m256d load_or_gather(const double* x, const int* v, bool consecutive) {
+  return consecutive ? _mm256_loadu_pd(x + v[0]) : gather(x, v);
+}
+MSD_AVX2 inline void store_or_scatter(double* x, const int* v, bool consecutive, __m256d value) {
+  if (consecutive) return _mm256_storeu_pd(x + v[0], value);
+  alignas(32) double lanes[4];
+  _mm256_store_pd(lanes, value);
+  for (int i = 0; i < 4; ++i) x[v[i]] = lanes[i];
+}
+
+// One coordinate of b' + ((α n + β t1) + γ t2) (9.8), lane by lane.
+MSD_AVX2 inline __m256d frame_point_x4(__m256d b, __m256d n, __m256d t1, __m256d t2, __m256d alpha, __m256d beta,
+                                       __m256d gamma) {
+  return _mm256_add_pd(
+      b, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(alpha, n), _mm256_mul_pd(beta, t1)), _mm256_mul_pd(gamma, t2)));
+}
+
+// DisplacementVectors::reconstruct's local-frame loop, p' = b' + α n' + β t1' + γ t2' (9.8), for entries
+// [k0, k1) of `list` (vertex k when null), four vertices at a time with VertexFrames::frame's and the
+// formula's operations lane by lane (no fused multiply-add), so the same bits. A group in which some vertex
+// has no normal or its first edge gives no tangent, and the last entries, go through one_vertex(context, v)
+// one at a time, as do the scalar kernels. Writes the rows of out (o, column-major, nv rows); returns whether
+// every written coordinate is finite.
+MSD_AVX2 bool reconstruct_local_x4(const FrameArrays& a, const phong::Columns& X, const double* c, long nv, double* o,
+                                   const int* list, long k0, long k1, bool (*one_vertex)(const void*, long),
+                                   const void* context) {
+  const __m256d zero = _mm256_setzero_pd(), min_normal = _mm256_set1_pd(kMinNormalFraction);
+  const __m256d min_tangent2 = _mm256_set1_pd(kMinTangentFraction * kMinTangentFraction);
+  __m256d check = zero;
+  bool ok = true;
+  long k = k0;
+  for (; k + 4 <= k1; k += 4) {
+    int v[4], edge[4], first[4], count[4], most = 0;
+    for (int i = 0; i < 4; ++i) {
+      v[i] = list ? list[k + i] : static_cast<int>(k + i);
+      first[i] = a.face_offsets[v[i]];
+      count[i] = a.face_offsets[v[i] + 1] - first[i];
+      most = std::max(most, count[i]);
+    }
+    // Σ n_f and Σ |n_f| around each vertex, its faces in its order; a vertex with fewer faces adds zeros,
+    // which leave its sums as they are (a sum from +0 is never −0).
+    __m256d sx = zero, sy = zero, sz = zero, weight = zero;
+    for (int j = 0; j < most; ++j) {
+      __m256d r[4];
+      for (int i = 0; i < 4; ++i)
+        r[i] = j < count[i] ? _mm256_loadu_pd(a.face_normals + 4 * a.incident_faces[first[i] + j]) : zero;
+      const __m256d t0 = _mm256_unpacklo_pd(r[0], r[1]), t1 = _mm256_unpackhi_pd(r[0], r[1]);
+      const __m256d t2 = _mm256_unpacklo_pd(r[2], r[3]), t3 = _mm256_unpackhi_pd(r[2], r[3]);
+      sx = _mm256_add_pd(sx, _mm256_permute2f128_pd(t0, t2, 0x20));
+      sy = _mm256_add_pd(sy, _mm256_permute2f128_pd(t1, t3, 0x20));
+      sz = _mm256_add_pd(sz, _mm256_permute2f128_pd(t0, t2, 0x31));
+      weight = _mm256_add_pd(weight, _mm256_permute2f128_pd(t1, t3, 0x31));
+    }
+    const __m256d len = _mm256_sqrt_pd(square_sum_x4(sx, sy, sz));
+    const __m256d has_normal = _mm256_and_pd(_mm256_cmp_pd(len, _mm256_mul_pd(min_normal, weight), _CMP_GT_OQ),
+                                             _mm256_cmp_pd(len, zero, _CMP_GT_OQ));
+    bool edges = true;
+    for (int i = 0; i < 4; ++i) {
+      edges = edges && a.offsets[v[i]] < a.offsets[v[i] + 1];
+      edge[i] = edges ? a.neighbours[a.offsets[v[i]]] : v[i];
+    }
+    const bool consecutive = v[3] - v[0] == 3;
+    const __m256d nx = _mm256_div_pd(sx, len), ny = _mm256_div_pd(sy, len), nz = _mm256_div_pd(sz, len);
+    const __m256d px = load_or_gather(X.x, v, consecutive), py = load_or_gather(X.y, v, consecutive),
+                  pz = load_or_gather(X.z, v, consecutive);
+    const __m256d ex = _mm256_sub_pd(gather(X.x, edge), px), ey = _mm256_sub_pd(gather(X.y, edge), py),
+                  ez = _mm256_sub_pd(gather(X.z, edge), pz);
+    const __m256d en = dot_x4(ex, ey, ez, nx, ny, nz);
+    __m256d tx = _mm256_sub_pd(ex, _mm256_mul_pd(en, nx)), ty = _mm256_sub_pd(ey, _mm256_mul_pd(en, ny)),
+            tz = _mm256_sub_pd(ez, _mm256_mul_pd(en, nz));
+    const __m256d t_len2 = square_sum_x4(tx, ty, tz);
+    const __m256d has_tangent =
+        _mm256_and_pd(_mm256_cmp_pd(t_len2, _mm256_mul_pd(min_tangent2, square_sum_x4(ex, ey, ez)), _CMP_GT_OQ),
+                      _mm256_cmp_pd(t_len2, zero, _CMP_GT_OQ));
+    if (!edges || _mm256_movemask_pd(_mm256_and_pd(has_normal, has_tangent)) != 0xF) {
+      for (int i = 0; i < 4; ++i) ok &= one_vertex(context, v[i]);
+      continue;
+    }
+    const __m256d t_len = _mm256_sqrt_pd(t_len2);
+    tx = _mm256_div_pd(tx, t_len), ty = _mm256_div_pd(ty, t_len), tz = _mm256_div_pd(tz, t_len);
+    // t2 = n × t1, as Eigen's cross()
+    const __m256d bx = _mm256_sub_pd(_mm256_mul_pd(ny, tz), _mm256_mul_pd(nz, ty));
+    const __m256d by = _mm256_sub_pd(_mm256_mul_pd(nz, tx), _mm256_mul_pd(nx, tz));
+    const __m256d bz = _mm256_sub_pd(_mm256_mul_pd(nx, ty), _mm256_mul_pd(ny, tx));
+    const __m256d alpha = load_or_gather(c, v, consecutive), beta = load_or_gather(c + nv, v, consecutive),
+                  gamma = load_or_gather(c + 2 * nv, v, consecutive);
+    const __m256d qx = frame_point_x4(px, nx, tx, bx, alpha, beta, gamma);
+    const __m256d qy = frame_point_x4(py, ny, ty, by, alpha, beta, gamma);
+    const __m256d qz = frame_point_x4(pz, nz, tz, bz, alpha, beta, gamma);
+    store_or_scatter(o, v, consecutive, qx);
+    store_or_scatter(o + nv, v, consecutive, qy);
+    store_or_scatter(o + 2 * nv, v, consecutive, qz);
+    check = _mm256_add_pd(check, _mm256_add_pd(_mm256_add_pd(_mm256_sub_pd(qx, qx), _mm256_sub_pd(qy, qy)),
+                                               _mm256_sub_pd(qz, qz)));
+  }
+  ok &= _mm256_movemask_pd(_mm256_cmp_pd(check, zero, _CMP_EQ_OQ)) == 0xF;
+  for (; k < k1; ++k) ok &= one_vertex(context, list ? list[k] : k);
+  return ok;
+}
 #endif
 
 }  // namespace
@@ -130,16 +240,10 @@ std::vector<int> VertexFrames::edge_order(int v) const {
   return std::vector<int>(neighbours_.begin() + offsets_[v], neighbours_.begin() + offsets_[v + 1]);
 }
 
-template <class Visit>
-void VertexFrames::visit_frames(const Positions& P, Visit visit, const std::vector<int>* vertices,
-                                const std::vector<int>* faces) const {
-  const long nv = vertices ? static_cast<long>(vertices->size()) : num_vertices();
+void VertexFrames::compute_face_normals(const phong::Columns& X, const std::vector<int>* faces) const {
   const long nf = faces ? static_cast<long>(faces->size()) : static_cast<long>(F_.rows());
-  const int* const vertex_list = vertices ? vertices->data() : nullptr;
   const int* const face_list = faces ? faces->data() : nullptr;
-  const phong::Columns X(P);
   double* const face_normals = face_normals_.data();
-  // Per face: the normal of length 2 · area (area weighting), or zero for a zero-area face, and its length.
   const int* const F = F_.data();  // row-major
   parallel_for_chunks(nf, [&](long begin, long end) {
 #if MSD_HAVE_AVX2_KERNELS
@@ -150,41 +254,57 @@ void VertexFrames::visit_frames(const Positions& P, Visit visit, const std::vect
       face_normal(X, F + 3 * f, face_normals + 4 * f);
     }
   });
+}
+
+void VertexFrames::frame(const phong::Columns& X, long v, Vec3& n, Vec3& t1, Vec3& t2) const {
+  Vec3 sum = Vec3::Zero();
+  double weight = 0;
+  for (int i = face_offsets_[v]; i < face_offsets_[v + 1]; ++i) {
+    const double* fn = face_normals_.data() + 4 * incident_faces_[i];
+    sum += Vec3(fn[0], fn[1], fn[2]);
+    weight += fn[3];
+  }
+  const double len = sum.norm();
+  if (!(len > kMinNormalFraction * weight) || !(len > 0)) {  // no normal: world frame
+    n = Vec3::UnitZ(), t1 = Vec3::UnitX(), t2 = Vec3::UnitY();
+    return;
+  }
+  n = sum / len;
+  const Vec3 p = X.row(v);
+  Vec3 t = Vec3::Zero();
+  bool found = false;
+  for (int i = offsets_[v]; i < offsets_[v + 1] && !found; ++i) {
+    const Vec3 e = X.row(neighbours_[i]) - p;
+    t = e - e.dot(n) * n;
+    const double t_len2 = t.squaredNorm();  // squared lengths compared: one square root less per vertex
+    if (t_len2 > kMinTangentFraction * kMinTangentFraction * e.squaredNorm() && t_len2 > 0) {
+      t /= std::sqrt(t_len2);
+      found = true;
+    }
+  }
+  if (!found) {  // every edge (nearly) parallel to n: the world axis least aligned with n
+    int axis = 0;
+    n.cwiseAbs().minCoeff(&axis);
+    const Vec3 e = Vec3::Unit(axis);
+    t = (e - e.dot(n) * n).normalized();
+  }
+  t1 = t;
+  t2 = n.cross(t);
+}
+
+template <class Visit>
+void VertexFrames::visit_frames(const Positions& P, Visit visit, const std::vector<int>* vertices,
+                                const std::vector<int>* faces) const {
+  const long nv = vertices ? static_cast<long>(vertices->size()) : num_vertices();
+  const int* const vertex_list = vertices ? vertices->data() : nullptr;
+  const phong::Columns X(P);
+  compute_face_normals(X, faces);
   parallel_for_chunks(nv, [&](long begin, long end) {
+    Vec3 n, t1, t2;
     for (long k = begin; k < end; ++k) {
       const long v = vertex_list ? vertex_list[k] : k;
-      Vec3 sum = Vec3::Zero();
-      double weight = 0;
-      for (int i = face_offsets_[v]; i < face_offsets_[v + 1]; ++i) {
-        const double* fn = face_normals + 4 * incident_faces_[i];
-        sum += Vec3(fn[0], fn[1], fn[2]);
-        weight += fn[3];
-      }
-      const double len = sum.norm();
-      if (!(len > kMinNormalFraction * weight) || !(len > 0)) {  // no normal: world frame
-        visit(v, Vec3::UnitZ(), Vec3::UnitX(), Vec3::UnitY());
-        continue;
-      }
-      const Vec3 n = sum / len;
-      const Vec3 p = X.row(v);
-      Vec3 t = Vec3::Zero();
-      bool found = false;
-      for (int i = offsets_[v]; i < offsets_[v + 1] && !found; ++i) {
-        const Vec3 e = X.row(neighbours_[i]) - p;
-        t = e - e.dot(n) * n;
-        const double t_len2 = t.squaredNorm();  // squared lengths compared: one square root less per vertex
-        if (t_len2 > kMinTangentFraction * kMinTangentFraction * e.squaredNorm() && t_len2 > 0) {
-          t /= std::sqrt(t_len2);
-          found = true;
-        }
-      }
-      if (!found) {  // every edge (nearly) parallel to n: the world axis least aligned with n
-        int axis = 0;
-        n.cwiseAbs().minCoeff(&axis);
-        const Vec3 e = Vec3::Unit(axis);
-        t = (e - e.dot(n) * n).normalized();
-      }
-      visit(v, n, t, n.cross(t));
+      frame(X, v, n, t1, t2);
+      visit(v, n, t1, t2);
     }
   });
 }
@@ -267,18 +387,34 @@ void DisplacementVectors::reconstruct(const Positions& B_deformed, Positions& ou
   double* const o = out.data();
   std::atomic<bool> finite{true};  // x − x is 0 for a finite x, NaN otherwise
   if (options_.frame == DisplacementFrame::Local) {
+    // The frames of B' straight into (9.8): no per-frame #V by 3 frame arrays written and read back. The
+    // vertices run in chunks on both cores; `finite` gathers their checks.
     const phong::Columns b(B_deformed);
-    // The frames of B' straight into (9.8): no per-frame #V by 3 frame arrays written and read back.
-    // visit_frames runs its vertices in chunks on both cores; `finite` gathers their checks.
-    frames_.visit_frames(
-        B_deformed,
-        [&](long v, const Vec3& n, const Vec3& t1, const Vec3& t2) {
-          const Vec3 p = b.row(v) + (c[v] * n + c[nv + v] * t1 + c[2 * nv + v] * t2);
-          o[v] = p.x(), o[nv + v] = p.y(), o[2 * nv + v] = p.z();
-          if (!((p.x() - p.x()) + (p.y() - p.y()) + (p.z() - p.z()) == 0))
-            finite.store(false, std::memory_order_relaxed);
-        },
-        all_vertices_ ? nullptr : &frame_vertices_, all_vertices_ ? nullptr : &frame_faces_);
+    const int* const list = all_vertices_ ? nullptr : frame_vertices_.data();
+    const long count = all_vertices_ ? nv : static_cast<long>(frame_vertices_.size());
+    frames_.compute_face_normals(b, all_vertices_ ? nullptr : &frame_faces_);
+    const auto one = [&](long v) {  // p' of vertex v; false where it is not finite
+      Vec3 n, t1, t2;
+      frames_.frame(b, v, n, t1, t2);
+      const Vec3 p = b.row(v) + (c[v] * n + c[nv + v] * t1 + c[2 * nv + v] * t2);
+      o[v] = p.x(), o[nv + v] = p.y(), o[2 * nv + v] = p.z();
+      return (p.x() - p.x()) + (p.y() - p.y()) + (p.z() - p.z()) == 0;
+    };
+    parallel_for_chunks(count, [&](long begin, long end) {
+      bool ok = true;
+#if MSD_HAVE_AVX2_KERNELS
+      if (cpu_has_avx2()) {
+        const FrameArrays arrays{frames_.face_offsets_.data(), frames_.incident_faces_.data(),
+                                 frames_.offsets_.data(), frames_.neighbours_.data(), frames_.face_normals_.data()};
+        const auto scalar = [](const void* one_vertex, long v) {
+          return (*static_cast<const decltype(one)*>(one_vertex))(v);
+        };
+        ok = reconstruct_local_x4(arrays, b, c, nv, o, list, begin, end, scalar, &one);
+      } else
+#endif
+        for (long k = begin; k < end; ++k) ok &= one(list ? list[k] : k);
+      if (!ok) finite.store(false, std::memory_order_relaxed);
+    });
   } else {
     parallel_for_chunks(nv, [&](long begin, long end) {
       double check = 0;

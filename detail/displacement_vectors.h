@@ -10,6 +10,9 @@
 #include "msdeform/detail/encoding.h"
 
 namespace msd {
+namespace phong {
+struct Columns;
+}
 
 //! Orthonormal per-vertex frames (n, t1, t2) of a mesh, with t2 = n × t1 (right-handed):
 //! - n: the area-weighted unit vertex normal (as VertexNormals), except that faces of area below 1e-14
@@ -45,6 +48,10 @@ class VertexFrames {
   template <class Visit>
   void visit_frames(const Positions& P, Visit visit, const std::vector<int>* vertices = nullptr,
                     const std::vector<int>* faces = nullptr) const;
+  //! visit_frames' first pass: the normals of `faces` (all when null) into face_normals_.
+  void compute_face_normals(const phong::Columns& X, const std::vector<int>* faces) const;
+  //! visit_frames' second pass for vertex v, from face_normals_.
+  void frame(const phong::Columns& X, long v, Vec3& n, Vec3& t1, Vec3& t2) const;
 
   Faces F_;
   std::vector<int> face_offsets_{0}, incident_faces_;  // CSR: faces around each vertex

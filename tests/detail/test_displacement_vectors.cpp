@@ -273,3 +273,45 @@ TEST_CASE("displacement vectors: placed vertices are skipped, the others reconst
   CHECK_THROWS_WITH(bad.encode(s.P, s.F, s.smooth, s.F), Contains("placed vertex -1 is out of range"));
   CHECK_FALSE(bad.encoded());
 }
+
+TEST_CASE("displacement vectors: every reconstructed vertex follows (9.8) with its frame, also where frames fall back",
+          "[detail][vectors]") {
+  // The frame loop runs four vertices at a time where the CPU allows; each vertex must still get exactly
+  // b' + α n' + β t1' + γ t2' with VertexFrames' frame. A bent bar with a collapsed disc (vertices without
+  // normal), plus the spiked fan (first edges along the normal) as a second component, and a vertex count
+  // that is not a multiple of four.
+  SceneOptions o;
+  o.resolution = 3001;
+  const Scene s = make_surface(SceneShape::Bar, o);
+  Positions fan_P;
+  Faces fan_F;
+  fan_with_spike(fan_P, fan_F);
+  const Eigen::Index n0 = s.P.rows(), nv = n0 + fan_P.rows();
+  Positions B(nv, 3);
+  B << s.smooth, fan_P;
+  Faces F(s.F.rows() + fan_F.rows(), 3);
+  F << s.F, fan_F.array() + static_cast<int>(n0);
+  Positions Bd = B;
+  for (Eigen::Index i = 0; i < n0; ++i) Bd(i, 1) += 0.3 * Bd(i, 0) * Bd(i, 0);
+  const Vec3 centre = Bd.row(n0 / 2);
+  int collapsed = 0;
+  for (Eigen::Index i = 0; i < n0; ++i)
+    if ((Bd.row(i).transpose() - centre).norm() < 0.05) Bd.row(i) = centre.transpose(), ++collapsed;
+  REQUIRE(collapsed > 8);
+  DisplacementVectors vectors;
+  vectors.encode(random_offsets(B, 0.01, 3), F, B, F);
+  Positions out;
+  vectors.reconstruct(Bd, out);
+  Positions N, T1, T2;
+  vectors.frames().compute(Bd, N, T1, T2);
+  const Eigen::MatrixX3d& c = vectors.coefficients();
+  int differ = 0, world_frames = 0;
+  for (Eigen::Index v = 0; v < nv; ++v) {
+    const Vec3 n = N.row(v), t1 = T1.row(v), t2 = T2.row(v);
+    const Vec3 expected = Bd.row(v).transpose() + (c(v, 0) * n + c(v, 1) * t1 + c(v, 2) * t2);
+    differ += (out.row(v).transpose() - expected).cwiseAbs().maxCoeff() != 0.0;
+    world_frames += n == Vec3::UnitZ() && t1 == Vec3::UnitX();
+  }
+  CHECK(world_frames >= collapsed / 2);
+  CHECK(differ == 0);
+}

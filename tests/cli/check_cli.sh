@@ -189,4 +189,16 @@ expect_error 1 "welding within 10 merged" "$msdeform" deform split.off --handle 
   --weld 10 --method arap -o x.off
 [ "$(sed -n 2p welded.off | cut -d' ' -f1)" = "$(sed -n 2p split.off | cut -d' ' -f1)" ] ||
   fail "--weld changed the vertex count of the output"
+# A singular handle transform is named by what it does to the handle: a plane, a line or a point.
+for rank in "plane:1 0 0 0\n0 1 0 0\n0 0 0 0.1\n0 0 0 1" "line:1 0 0 0\n0 0 0 0\n0 0 0 0.1\n0 0 0 1" \
+  "point:0 0 0 0\n0 0 0 0\n0 0 0 0.1\n0 0 0 1"; do
+  printf "${rank#*:}\n" >singular.def
+  "$msdeform" deform lift.off --sel lift.sel --def singular.def --method shell -o singular.off >/dev/null 2>err.txt ||
+    { cat err.txt; fail "deform with a singular handle transform"; }
+  case "${rank%%:*}" in
+    plane) grep -q "flattens the handle onto a plane" err.txt ;;
+    line) grep -q "collapses the handle onto a line" err.txt ;;
+    point) grep -q "collapses the handle to a point" err.txt ;;
+  esac || { cat err.txt; fail "the warning for a transform of rank ${rank%%:*}"; }
+done
 echo "check_cli: passed"

@@ -31,11 +31,18 @@ void ShellDeformer::do_prepare(const Positions& P, const Faces& F, const Region&
   const int nv = static_cast<int>(rest_.rows()), nh = region.num_handles();
   // (9.7) in symmetric form: −ks·L + kb·L² (L = M⁻¹W) multiplied by M is ks·Q₁ + kb·Q₂. The Laplacian and
   // Q are released before the factorisation, the peak of memory.
+  // Only the ratio ks : kb shapes the displacements, so stiffnesses such as 1e-320 or 1e308 must neither
+  // underflow nor overflow Q: one of them zero, the other is taken as 1; otherwise both are scaled by the
+  // power of four that brings the larger near 1, which scales Q, its Cholesky factor and the right-hand
+  // sides exactly (the same bits as unscaled).
+  const int exponent = std::ilogb(std::max(options_.ks, options_.kb)) & ~1;  // even, rounded down
+  const double ks = options_.kb == 0 ? 1.0 : std::ldexp(options_.ks, -exponent);
+  const double kb = options_.ks == 0 ? 1.0 : std::ldexp(options_.kb, -exponent);
   SparseMatrix Q(nv, nv);
   {
     const LaplaceOperator lap = cotan_laplacian(rest_, F);
-    if (options_.ks > 0) Q = options_.ks * polyharmonic_matrix(lap, 1);
-    if (options_.kb > 0) Q += options_.kb * polyharmonic_matrix(lap, 2);
+    if (ks > 0) Q = ks * polyharmonic_matrix(lap, 1);
+    if (kb > 0) Q += kb * polyharmonic_matrix(lap, 2);
   }
   constrained_ = region.constrained_vertices();
   try {

@@ -134,7 +134,8 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
   for (const std::string& w : base.warnings) r.warnings.push_back(w);
   r.folded_faces = fold_check_.count(out, base_deformed_, transforms);
   if (r.folded_faces > 0)
-    r.warnings.push_back(name_ + ": " + std::to_string(r.folded_faces) + " triangles folded over the deformed base; " +
+    r.warnings.push_back(name_ + ": " + std::to_string(r.folded_faces) +
+                         (r.folded_faces == 1 ? " triangle" : " triangles") + " folded over the deformed base; " +
                          (d.hierarchy ? "a finer control mesh or the low-pass base keeps them apart"
                                       : "a smaller detail scale keeps them apart (the other encodings fold more or less "
                                         "depending on the edit: msdeform compare measures them)"));

@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include "msdeform/core/errors.h"
@@ -75,6 +77,31 @@ TEST_CASE("shell: identity transforms return the input exactly", "[deformation][
     shell.prepare(mesh, s.region);
     CHECK((shell.deform({Mat4::Identity()}) - s.P).cwiseAbs().maxCoeff() <= 1e-12);
   }
+}
+
+TEST_CASE("shell: only the ratio of the stiffnesses matters, down to subnormal and up to huge values",
+          "[deformation][shell]") {
+  // (0, 4.9e-324) and (0, 1.7e308) are pure bending like (0, 1): they used to make the system singular or
+  // its basis infinite. Scaling both stiffnesses by a power of four gives the same bits, by another factor
+  // the same result to rounding.
+  const Scene s = small_scene("bend120");
+  const Mesh mesh = make_mesh(s.P, s.F);
+  const auto result = [&](ShellOptions o) {
+    ShellDeformer shell(o);
+    shell.prepare(mesh, s.region);
+    return shell.deform(s.transforms);
+  };
+  const Positions bending = result({0, 1});
+  for (const double kb : {std::numeric_limits<double>::denorm_min(), 1e-300, 1.7e308}) {
+    INFO("kb " << kb);
+    CHECK(result({0, kb}) == bending);
+  }
+  CHECK(result({1e-300, 0}) == result({1, 0}));
+  const Positions mixed = result({1, 10});
+  CHECK(result({std::ldexp(1.0, -600), std::ldexp(10.0, -600)}) == mixed);
+  CHECK(result({std::ldexp(1.0, 1000), std::ldexp(10.0, 1000)}) == mixed);
+  CHECK((result({1e-300, 1e-299}) - mixed).cwiseAbs().maxCoeff() <= 1e-12);
+  CHECK((result({1.7e307, 1.7e308}) - mixed).cwiseAbs().maxCoeff() <= 1e-12);
 }
 
 TEST_CASE("shell: the result solves (9.6) at free vertices and meets every constraint", "[deformation][shell]") {

@@ -330,6 +330,11 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
     load_soup(write("plain.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), &report);
     CHECK(report.first_attribute_line == 0);
   }
+  // Words after a record are not colours: refused by name (they were dropped without a word).
+  CHECK_THROWS_WITH(load_soup(write("face-junk.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 trailing junk\n")),
+                    Contains("line 6") && Contains("'trailing' after face 0's indices is not a number"));
+  CHECK_THROWS_WITH(load_soup(write("vertex-junk.off", "OFF\n3 1 0\n0 0 0\n1 0 0 7 x\n0 1 0\n3 0 1 2\n")),
+                    Contains("line 4") && Contains("'x' after vertex 1's coordinates is not a number"));
   // A face with two corners is named, not taken for a short file (the byte count assumed 3 corners).
   CHECK_THROWS_WITH(load_mesh(write("two.off", "OFF\n4 3 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n2 1 3\n3 1 3 2\n")),
                     Contains("face 1 has 2 corners"));

@@ -115,8 +115,9 @@ T parse_number(std::string_view tok, const LineReader& reader, const char* what)
 
 // Reads past the rest of an OFF record, the colour or normal numbers after a vertex's coordinates or a
 // face's indices: whether there were any. \throw (reader.fail) for a token that is not a number, naming it
-// and the record (record: "vertex" or "face", index its number).
-bool skip_attributes(std::string_view& line, const LineReader& reader, const char* record, long index) {
+// and the record ("vertex" or "face" `index`, whose `fields` the numbers follow).
+bool skip_attributes(std::string_view& line, const LineReader& reader, const char* record, long index,
+                     const char* fields) {
   bool any = false;
   for (std::string_view tok = next_token(line); !tok.empty(); tok = next_token(line), any = true) {
     double value;
@@ -124,8 +125,7 @@ bool skip_attributes(std::string_view& line, const LineReader& reader, const cha
     const auto [ptr, ec] = std::from_chars(first, tok.data() + tok.size(), value);
     if (ptr != tok.data() + tok.size() || (ec != std::errc() && ec != std::errc::result_out_of_range))
       reader.fail("'" + printable(tok.substr(0, 40)) + "' after " + record + " " + std::to_string(index) + "'s " +
-                  (std::string(record) == "vertex" ? "coordinates" : "indices") +
-                  " is not a number (only colour or normal numbers may follow them)");
+                  fields + " is not a number (only colour or normal numbers may follow them)");
   }
   return any;
 }
@@ -208,7 +208,7 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
       p[k] = parse_number<double>(record_token(reader, line, wrapped), reader, "a coordinate");
     if (!p.allFinite()) reader.fail("vertex has a non-finite coordinate (NaN or inf)");
     check_wrapped_record_end(reader, line, wrapped, "vertex", i, first_line);
-    if (skip_attributes(line, reader, "vertex", i) && extra_line == 0) extra_line = reader.number();
+    if (skip_attributes(line, reader, "vertex", i, "coordinates") && extra_line == 0) extra_line = reader.number();
     soup.points.push_back(p);
   }
   for (long f = 0; f < nf; ++f) {
@@ -222,7 +222,7 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
     for (long k = 0; k < n; ++k)
       soup.corners.push_back(parse_number<int>(record_token(reader, line, wrapped), reader, "a vertex index"));
     check_wrapped_record_end(reader, line, wrapped, "face", f, first_line);
-    if (!wrapped && skip_attributes(line, reader, "face", f) && soup.first_attribute_line == 0)
+    if (!wrapped && skip_attributes(line, reader, "face", f, "indices") && soup.first_attribute_line == 0)
       soup.first_attribute_line = reader.number();  // a face colour
     soup.offsets.push_back(static_cast<int>(soup.corners.size()));
     soup.lines.push_back(reader.number());

@@ -30,8 +30,6 @@ DeformerTraits ShellDeformer::traits() const {
 void ShellDeformer::do_prepare(const Positions& P, const Faces& F, const Region& region) {
   rest_ = P;
   const int nv = static_cast<int>(rest_.rows()), nh = region.num_handles();
-  // (9.7) in symmetric form: −ks·L + kb·L² (L = M⁻¹W) multiplied by M is ks·Q₁ + kb·Q₂. The Laplacian and
-  // Q are released before the factorisation, the peak of memory.
   // Only the ratio ks : kb shapes the displacements, so stiffnesses such as 1e-320 or 1e308 must neither
   // underflow nor overflow Q: one of them zero, the other is taken as 1; otherwise both are scaled by the
   // power of four that brings the larger near 1, which scales Q, its Cholesky factor and the right-hand
@@ -39,6 +37,8 @@ void ShellDeformer::do_prepare(const Positions& P, const Faces& F, const Region&
   const int exponent = std::ilogb(std::max(options_.ks, options_.kb)) & ~1;  // even, rounded down
   const double ks = options_.kb == 0 ? 1.0 : std::ldexp(options_.ks, -exponent);
   const double kb = options_.ks == 0 ? 1.0 : std::ldexp(options_.kb, -exponent);
+  // (9.7) in symmetric form: −ks·L + kb·L² (L = M⁻¹W) multiplied by M is ks·Q₁ + kb·Q₂. The Laplacian and
+  // Q are released before the factorisation, the peak of memory.
   SparseMatrix Q(nv, nv);
   {
     const LaplaceOperator lap = cotan_laplacian(rest_, F);

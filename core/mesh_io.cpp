@@ -164,10 +164,11 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
   std::string_view line;
   if (!reader.next(line)) throw InvalidInput(who + ": " + path + " is empty");
   std::string_view head = next_token(line);
-  // OFF, COFF, NOFF, CNOFF, STOFF, 4OFF, nOFF ...: a prefix of at most 3 letters, then "OFF". Some
-  // writers (ModelNet) glue the vertex count to it: "OFF8 6 0".
+  // OFF, COFF, NOFF, CNOFF, STOFF, STCNOFF, 4OFF, nOFF ...: a prefix of the letters S, T, C, N, 4, n (in
+  // the order [ST][C][N][4][n]), then "OFF". Some writers (ModelNet) glue the vertex count to it: "OFF8 6 0".
   const size_t off = head.find("OFF");
-  if (off == std::string_view::npos || off > 3)
+  if (off == std::string_view::npos || off > 6 ||
+      head.substr(0, off).find_first_not_of("STCN4n") != std::string_view::npos)
     reader.fail("not an OFF file: the first line must start with 'OFF' (or COFF, NOFF, ...), found '" +
                 printable(head.substr(0, 40)) + "'");
   // 4OFF's fourth coordinate is a homogeneous w, nOFF's dimension is not 3: read as plain OFF, both are wrong.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 #include <vector>
 
@@ -16,8 +17,11 @@ namespace msd {
 ShellDeformer::ShellDeformer(ShellOptions options) : options_(options) {
   if (!(options_.ks >= 0) || !(options_.kb >= 0) || !std::isfinite(options_.ks) || !std::isfinite(options_.kb) ||
       options_.ks + options_.kb <= 0)
-    throw InvalidInput("shell: stiffnesses must be finite and non-negative with ks + kb > 0 (got ks = " +
-                       std::to_string(options_.ks) + ", kb = " + std::to_string(options_.kb) + ")");
+  {
+    char got[100];
+    std::snprintf(got, sizeof got, "(got ks = %.6g, kb = %.6g)", options_.ks, options_.kb);
+    throw InvalidInput(std::string("shell: stiffnesses must be finite and non-negative with ks + kb > 0 ") + got);
+  }
 }
 
 DeformerTraits ShellDeformer::traits() const {

@@ -11,7 +11,8 @@ namespace msd {
 struct ShellOptions {
   //! Stretching stiffness ks (membrane term). Lengths are mesh units: ks and kb trade off as ks·ℓ² : kb
   //! for a feature of size ℓ. ks = 0 (pure bending) is scale-invariant. Only the ratio ks : kb matters, at
-  //! any finite magnitude (1e-320 or 1e308 as well).
+  //! any finite magnitude (1e-320 or 1e308 as well): the same bits when both differ by a power of four or
+  //! one is zero, the same result to rounding otherwise.
   double ks = 0.0;
   //! Bending stiffness kb (thin-plate term). Fig. 9.4: (1, 0) pure stretching, (0, 1) pure bending,
   //! (1, 10) a mix on the unit plane.

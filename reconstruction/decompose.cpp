@@ -55,12 +55,12 @@ std::string check_decomposition(const DecompositionReport& r, const Decompositio
   char where[200];
   std::snprintf(where, sizeof where, "near vertex %d the detail height %.3g is %.3g times the base's curvature radius %.3g",
                 c.worst_vertex, c.worst_height, c.max_fold_ratio, c.worst_radius);
+  const std::string vertices =
+      std::to_string(c.folding_vertices) + (c.folding_vertices == 1 ? " vertex" : " vertices");
   if (c.folding_vertices > static_cast<long>(1e-3 * static_cast<double>(num_vertices)))
-    throw TopologyError("decompose: the details fold over at rest (" + std::to_string(c.folding_vertices) +
-                        " vertices with a height above the base's curvature radius; " + where + "): " + remedy(r));
-  if (folds)
-    return "decompose: the details of " + std::to_string(c.folding_vertices) + " vertices fold over at rest (" +
-           where + "): " + remedy(r);
+    throw TopologyError("decompose: the details fold over at rest (" + vertices +
+                        " with a height above the base's curvature radius; " + where + "): " + remedy(r));
+  if (folds) return "decompose: the details of " + vertices + " fold over at rest (" + where + "): " + remedy(r);
   return std::string("decompose: the details come close to folding over the base (") + where +
          "); an edit that bends the base further may fold them: " + remedy(r);
 }

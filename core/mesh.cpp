@@ -157,13 +157,12 @@ MSD_AVX2 void fan_normals_x4(const double* px, const double* py, const double* p
       j = r + 4 * t;
       const __m256d bx = _mm256_sub_pd(gather(px, j), x), by = _mm256_sub_pd(gather(py, j), y),
                     bz = _mm256_sub_pd(gather(pz, j), z);
-      sx = _mm256_add_pd(sx, _mm256_sub_pd(_mm256_mul_pd(ay, bz), _mm256_mul_pd(az, by)));
-      sy = _mm256_add_pd(sy, _mm256_sub_pd(_mm256_mul_pd(az, bx), _mm256_mul_pd(ax, bz)));
-      sz = _mm256_add_pd(sz, _mm256_sub_pd(_mm256_mul_pd(ax, by), _mm256_mul_pd(ay, bx)));
+      __m256d cx, cy, cz;
+      cross_x4(ax, ay, az, bx, by, bz, cx, cy, cz);
+      sx = _mm256_add_pd(sx, cx), sy = _mm256_add_pd(sy, cy), sz = _mm256_add_pd(sz, cz);
       ax = bx, ay = by, az = bz;
     }
-    const __m256d norm = _mm256_sqrt_pd(
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(sx, sx), _mm256_mul_pd(sy, sy)), _mm256_mul_pd(sz, sz)));
+    const __m256d norm = _mm256_sqrt_pd(square_sum_x4(sx, sy, sz));
     // 1 / norm where norm > 0, else 0 (a NaN norm compares false, as in the single-vertex loop)
     const __m256d inv =
         _mm256_and_pd(_mm256_cmp_pd(norm, _mm256_setzero_pd(), _CMP_GT_OQ), _mm256_div_pd(_mm256_set1_pd(1.0), norm));

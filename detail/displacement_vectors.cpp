@@ -60,9 +60,8 @@ MSD_AVX2 void face_normals_x4(const phong::Columns& X, const int* F, const int* 
     const __m256d ux = _mm256_sub_pd(bx, ax), uy = _mm256_sub_pd(by, ay), uz = _mm256_sub_pd(bz, az);
     const __m256d vx = _mm256_sub_pd(cx, ax), vy = _mm256_sub_pd(cy, ay), vz = _mm256_sub_pd(cz, az);
     const __m256d wx = _mm256_sub_pd(cx, bx), wy = _mm256_sub_pd(cy, by), wz = _mm256_sub_pd(cz, bz);
-    __m256d nx = _mm256_sub_pd(_mm256_mul_pd(uy, vz), _mm256_mul_pd(uz, vy));
-    __m256d ny = _mm256_sub_pd(_mm256_mul_pd(uz, vx), _mm256_mul_pd(ux, vz));
-    __m256d nz = _mm256_sub_pd(_mm256_mul_pd(ux, vy), _mm256_mul_pd(uy, vx));
+    __m256d nx, ny, nz;
+    cross_x4(ux, uy, uz, vx, vy, vz, nx, ny, nz);
     const __m256d longest2 = max_x4(max_x4(square_sum_x4(ux, uy, uz), square_sum_x4(wx, wy, wz)),
                                     square_sum_x4(vx, vy, vz));
     __m256d len = _mm256_sqrt_pd(square_sum_x4(nx, ny, nz));
@@ -70,12 +69,11 @@ MSD_AVX2 void face_normals_x4(const phong::Columns& X, const int* F, const int* 
         _mm256_cmp_pd(len, _mm256_mul_pd(_mm256_set1_pd(kMinAreaFraction * 2), longest2), _CMP_GT_OQ);
     nx = _mm256_and_pd(nx, area), ny = _mm256_and_pd(ny, area), nz = _mm256_and_pd(nz, area);
     len = _mm256_and_pd(len, area);
-    const __m256d t0 = _mm256_unpacklo_pd(nx, ny), t1 = _mm256_unpackhi_pd(nx, ny);
-    const __m256d t2 = _mm256_unpacklo_pd(nz, len), t3 = _mm256_unpackhi_pd(nz, len);
-    _mm256_storeu_pd(out + 4 * f[0], _mm256_permute2f128_pd(t0, t2, 0x20));
-    _mm256_storeu_pd(out + 4 * f[1], _mm256_permute2f128_pd(t1, t3, 0x20));
-    _mm256_storeu_pd(out + 4 * f[2], _mm256_permute2f128_pd(t0, t2, 0x31));
-    _mm256_storeu_pd(out + 4 * f[3], _mm256_permute2f128_pd(t1, t3, 0x31));
+    transpose_x4(nx, ny, nz, len);  // now face i's (n, |n|) in the i-th
+    _mm256_storeu_pd(out + 4 * f[0], nx);
+    _mm256_storeu_pd(out + 4 * f[1], ny);
+    _mm256_storeu_pd(out + 4 * f[2], nz);
+    _mm256_storeu_pd(out + 4 * f[3], len);
   }
   for (; k < k1; ++k) {
     const long f = list ? list[k] : k;
@@ -89,10 +87,6 @@ struct FrameArrays {
   const double* face_normals;
 };
 
-// a · b lane by lane in the order of Eigen's dot() of 3-vectors: (a_x b_x + a_y b_y) + a_z b_z.
-MSD_AVX2 inline __m256d dot_x4(__m256d ax, __m256d ay, __m256d az, __m256d bx, __m256d by, __m256d bz) {
-  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(ax, bx), _mm256_mul_pd(ay, by)), _mm256_mul_pd(az, bz));
-}
 MSD_AVX2 inline __m256d load_or_gather(const double* x, const int* v, bool consecutive) {
   return consecutive ? _mm256_loadu_pd(x + v[0]) : gather(x, v);
 }
@@ -139,12 +133,9 @@ MSD_AVX2 bool reconstruct_local_x4(const FrameArrays& a, const phong::Columns& X
       __m256d r[4];
       for (int i = 0; i < 4; ++i)
         r[i] = j < count[i] ? _mm256_loadu_pd(a.face_normals + 4 * a.incident_faces[first[i] + j]) : zero;
-      const __m256d t0 = _mm256_unpacklo_pd(r[0], r[1]), t1 = _mm256_unpackhi_pd(r[0], r[1]);
-      const __m256d t2 = _mm256_unpacklo_pd(r[2], r[3]), t3 = _mm256_unpackhi_pd(r[2], r[3]);
-      sx = _mm256_add_pd(sx, _mm256_permute2f128_pd(t0, t2, 0x20));
-      sy = _mm256_add_pd(sy, _mm256_permute2f128_pd(t1, t3, 0x20));
-      sz = _mm256_add_pd(sz, _mm256_permute2f128_pd(t0, t2, 0x31));
-      weight = _mm256_add_pd(weight, _mm256_permute2f128_pd(t1, t3, 0x31));
+      transpose_x4(r[0], r[1], r[2], r[3]);
+      sx = _mm256_add_pd(sx, r[0]), sy = _mm256_add_pd(sy, r[1]), sz = _mm256_add_pd(sz, r[2]);
+      weight = _mm256_add_pd(weight, r[3]);
     }
     const __m256d len = _mm256_sqrt_pd(square_sum_x4(sx, sy, sz));
     const __m256d has_normal = _mm256_and_pd(_mm256_cmp_pd(len, _mm256_mul_pd(min_normal, weight), _CMP_GT_OQ),
@@ -173,10 +164,8 @@ MSD_AVX2 bool reconstruct_local_x4(const FrameArrays& a, const phong::Columns& X
     }
     const __m256d t_len = _mm256_sqrt_pd(t_len2);
     tx = _mm256_div_pd(tx, t_len), ty = _mm256_div_pd(ty, t_len), tz = _mm256_div_pd(tz, t_len);
-    // t2 = n × t1, as Eigen's cross()
-    const __m256d bx = _mm256_sub_pd(_mm256_mul_pd(ny, tz), _mm256_mul_pd(nz, ty));
-    const __m256d by = _mm256_sub_pd(_mm256_mul_pd(nz, tx), _mm256_mul_pd(nx, tz));
-    const __m256d bz = _mm256_sub_pd(_mm256_mul_pd(nx, ty), _mm256_mul_pd(ny, tx));
+    __m256d bx, by, bz;  // t2 = n × t1
+    cross_x4(nx, ny, nz, tx, ty, tz, bx, by, bz);
     const __m256d alpha = load_or_gather(c, v, consecutive), beta = load_or_gather(c + nv, v, consecutive),
                   gamma = load_or_gather(c + 2 * nv, v, consecutive);
     const __m256d qx = frame_point_x4(px, nx, tx, bx, alpha, beta, gamma);

@@ -193,12 +193,9 @@ MSD_AVX2 void reconstruct_samples_x4(const Sample* samples, long begin, long end
   for (; k + 4 <= end; k += 4) {
     const Sample* s = samples + k;
     // (w0, w1, w2, h) of the four samples, transposed.
-    const __m256d r0 = _mm256_loadu_pd(s[0].w), r1 = _mm256_loadu_pd(s[1].w);
-    const __m256d r2 = _mm256_loadu_pd(s[2].w), r3 = _mm256_loadu_pd(s[3].w);
-    const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
-    const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
-    const __m256d w0 = _mm256_permute2f128_pd(t0, t2, 0x20), w1 = _mm256_permute2f128_pd(t1, t3, 0x20);
-    const __m256d w2 = _mm256_permute2f128_pd(t0, t2, 0x31), h = _mm256_permute2f128_pd(t1, t3, 0x31);
+    __m256d w0 = _mm256_loadu_pd(s[0].w), w1 = _mm256_loadu_pd(s[1].w);
+    __m256d w2 = _mm256_loadu_pd(s[2].w), h = _mm256_loadu_pd(s[3].w);
+    transpose_x4(w0, w1, w2, h);
     const __m256d mx = interpolate_x4(s, N.p, 3, w0, w1, w2), my = interpolate_x4(s, N.p + 1, 3, w0, w1, w2),
                   mz = interpolate_x4(s, N.p + 2, 3, w0, w1, w2);
     const __m256d length = _mm256_sqrt_pd(square_sum_x4(mx, my, mz));

@@ -23,7 +23,7 @@ constexpr double kMinAreaFraction = TriangleCotangents::kDegenerateAreaRatio;
 // A vertex normal sum shorter than this fraction of its terms' total length has cancelled: no direction.
 constexpr double kMinNormalFraction = 1e-12;
 
-// visit_frames' face pass for the face with corners t = (a, b, c): its normal (p_b − p_a) × (p_c − p_a), of
+// compute_face_normals' work for the face with corners t = (a, b, c): its normal (p_b − p_a) × (p_c − p_a), of
 // length 2 · area, and that length into out[0..3], or zeros for a zero-area face. Written out term by term so
 // that face_normals_x4 can do the same operations.
 inline void face_normal(const phong::Columns& X, const int* t, double* out) {
@@ -281,23 +281,6 @@ void VertexFrames::frame(const phong::Columns& X, long v, Vec3& n, Vec3& t1, Vec
   t2 = n.cross(t);
 }
 
-template <class Visit>
-void VertexFrames::visit_frames(const Positions& P, Visit visit, const std::vector<int>* vertices,
-                                const std::vector<int>* faces) const {
-  const long nv = vertices ? static_cast<long>(vertices->size()) : num_vertices();
-  const int* const vertex_list = vertices ? vertices->data() : nullptr;
-  const phong::Columns X(P);
-  compute_face_normals(X, faces);
-  parallel_for_chunks(nv, [&](long begin, long end) {
-    Vec3 n, t1, t2;
-    for (long k = begin; k < end; ++k) {
-      const long v = vertex_list ? vertex_list[k] : k;
-      frame(X, v, n, t1, t2);
-      visit(v, n, t1, t2);
-    }
-  });
-}
-
 void VertexFrames::compute(const Positions& P, Positions& N, Positions& T1, Positions& T2) const {
   const long nv = num_vertices();
   if (P.rows() != nv)
@@ -306,10 +289,14 @@ void VertexFrames::compute(const Positions& P, Positions& N, Positions& T1, Posi
   if (N.rows() != nv) N.resize(nv, 3);
   if (T1.rows() != nv) T1.resize(nv, 3);
   if (T2.rows() != nv) T2.resize(nv, 3);
-  visit_frames(P, [&](long v, const Vec3& n, const Vec3& t1, const Vec3& t2) {
-    N.row(v) = n;
-    T1.row(v) = t1;
-    T2.row(v) = t2;
+  const phong::Columns X(P);
+  compute_face_normals(X, nullptr);
+  parallel_for_chunks(nv, [&](long begin, long end) {
+    Vec3 n, t1, t2;
+    for (long v = begin; v < end; ++v) {
+      frame(X, v, n, t1, t2);
+      N.row(v) = n, T1.row(v) = t1, T2.row(v) = t2;
+    }
   });
 }
 

@@ -43,14 +43,9 @@ class VertexFrames {
 
  private:
   friend class DisplacementVectors;  // reconstructs from each frame as it is computed
-  //! Calls visit(v, n, t1, t2) for every vertex, or only for `vertices` when given (ascending, with
-  //! `faces` the ascending list of their incident faces), in parallel chunks (P has #V rows).
-  template <class Visit>
-  void visit_frames(const Positions& P, Visit visit, const std::vector<int>* vertices = nullptr,
-                    const std::vector<int>* faces = nullptr) const;
-  //! visit_frames' first pass: the normals of `faces` (all when null) into face_normals_.
+  //! A frame's first pass: the normals of `faces` (all when null) at positions X into face_normals_.
   void compute_face_normals(const phong::Columns& X, const std::vector<int>* faces) const;
-  //! visit_frames' second pass for vertex v, from face_normals_.
+  //! Its second pass: the frame of vertex v at X, from face_normals_ (which must hold its faces').
   void frame(const phong::Columns& X, long v, Vec3& n, Vec3& t1, Vec3& t2) const;
 
   Faces F_;

@@ -124,8 +124,8 @@ bool skip_attributes(std::string_view& line, const LineReader& reader, const cha
     const char* first = tok.data() + (tok[0] == '+');
     const auto [ptr, ec] = std::from_chars(first, tok.data() + tok.size(), value);
     if (ptr != tok.data() + tok.size() || (ec != std::errc() && ec != std::errc::result_out_of_range))
-      reader.fail("'" + printable(tok.substr(0, 40)) + "' after " + record + " " + std::to_string(index) + "'s " +
-                  fields + " is not a number (only colour or normal numbers may follow them)");
+      reader.fail("'" + printable(tok.substr(0, 40)) + "' after " + record + " " + std::to_string(index) +
+                  "'s " + fields + " is not a number (only colour or normal numbers may follow them)");
   }
   return any;
 }
@@ -209,7 +209,8 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
       p[k] = parse_number<double>(record_token(reader, line, wrapped), reader, "a coordinate");
     if (!p.allFinite()) reader.fail("vertex has a non-finite coordinate (NaN or inf)");
     check_wrapped_record_end(reader, line, wrapped, "vertex", i, first_line);
-    if (skip_attributes(line, reader, "vertex", i, "coordinates") && extra_line == 0) extra_line = reader.number();
+    if (skip_attributes(line, reader, "vertex", i, "coordinates") && extra_line == 0)
+      extra_line = reader.number();
     soup.points.push_back(p);
   }
   for (long f = 0; f < nf; ++f) {

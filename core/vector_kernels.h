@@ -50,8 +50,8 @@ MSD_AVX2 inline __m256d dot_x4(__m256d ax, __m256d ay, __m256d az, __m256d bx, _
 }
 
 //! c = a × b lane by lane, as Eigen's cross(): (a_y b_z − a_z b_y, a_z b_x − a_x b_z, a_x b_y − a_y b_x).
-MSD_AVX2 inline void cross_x4(__m256d ax, __m256d ay, __m256d az, __m256d bx, __m256d by, __m256d bz, __m256d& cx,
-                              __m256d& cy, __m256d& cz) {
+MSD_AVX2 inline void cross_x4(__m256d ax, __m256d ay, __m256d az, __m256d bx, __m256d by, __m256d bz,
+                              __m256d& cx, __m256d& cy, __m256d& cz) {
   cx = _mm256_sub_pd(_mm256_mul_pd(ay, bz), _mm256_mul_pd(az, by));
   cy = _mm256_sub_pd(_mm256_mul_pd(az, bx), _mm256_mul_pd(ax, bz));
   cz = _mm256_sub_pd(_mm256_mul_pd(ax, by), _mm256_mul_pd(ay, bx));

@@ -15,12 +15,12 @@
 namespace msd {
 
 ShellDeformer::ShellDeformer(ShellOptions options) : options_(options) {
-  if (!(options_.ks >= 0) || !(options_.kb >= 0) || !std::isfinite(options_.ks) || !std::isfinite(options_.kb) ||
-      options_.ks + options_.kb <= 0)
-  {
+  if (!(options_.ks >= 0) || !(options_.kb >= 0) || !std::isfinite(options_.ks) ||
+      !std::isfinite(options_.kb) || options_.ks + options_.kb <= 0) {
     char got[100];
     std::snprintf(got, sizeof got, "(got ks = %.6g, kb = %.6g)", options_.ks, options_.kb);
-    throw InvalidInput(std::string("shell: stiffnesses must be finite and non-negative with ks + kb > 0 ") + got);
+    throw InvalidInput(std::string("shell: stiffnesses must be finite and non-negative with ks + kb > 0 ") +
+                       got);
   }
 }
 

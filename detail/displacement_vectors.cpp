@@ -23,9 +23,9 @@ constexpr double kMinAreaFraction = TriangleCotangents::kDegenerateAreaRatio;
 // A vertex normal sum shorter than this fraction of its terms' total length has cancelled: no direction.
 constexpr double kMinNormalFraction = 1e-12;
 
-// compute_face_normals' work for the face with corners t = (a, b, c): its normal (p_b − p_a) × (p_c − p_a), of
-// length 2 · area, and that length into out[0..3], or zeros for a zero-area face. Written out term by term so
-// that face_normals_x4 can do the same operations.
+// compute_face_normals' work for the face with corners t = (a, b, c): its normal (p_b − p_a) × (p_c − p_a),
+// of length 2 · area, and that length into out[0..3], or zeros for a zero-area face. Written out term by term
+// so that face_normals_x4 can do the same operations.
 inline void face_normal(const phong::Columns& X, const int* t, double* out) {
   const int a = t[0], b = t[1], c = t[2];
   const double ux = X.x[b] - X.x[a], uy = X.y[b] - X.y[a], uz = X.z[b] - X.z[a];
@@ -98,10 +98,10 @@ MSD_AVX2 inline void store_or_scatter(double* x, const int* v, bool consecutive,
 }
 
 // One coordinate of b' + ((α n + β t1) + γ t2) (9.8), lane by lane.
-MSD_AVX2 inline __m256d frame_point_x4(__m256d b, __m256d n, __m256d t1, __m256d t2, __m256d alpha, __m256d beta,
-                                       __m256d gamma) {
-  return _mm256_add_pd(
-      b, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(alpha, n), _mm256_mul_pd(beta, t1)), _mm256_mul_pd(gamma, t2)));
+MSD_AVX2 inline __m256d frame_point_x4(__m256d b, __m256d n, __m256d t1, __m256d t2, __m256d alpha,
+                                       __m256d beta, __m256d gamma) {
+  return _mm256_add_pd(b, _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(alpha, n), _mm256_mul_pd(beta, t1)),
+                                        _mm256_mul_pd(gamma, t2)));
 }
 
 // DisplacementVectors::reconstruct's local-frame loop, p' = b' + α n' + β t1' + γ t2' (9.8), for entries
@@ -110,9 +110,9 @@ MSD_AVX2 inline __m256d frame_point_x4(__m256d b, __m256d n, __m256d t1, __m256d
 // has no normal or its first edge gives no tangent, and the last entries, go through one_vertex(context, v)
 // one at a time, as do the scalar kernels. Writes the rows of out (o, column-major, nv rows); returns whether
 // every written coordinate is finite.
-MSD_AVX2 bool reconstruct_local_x4(const FrameArrays& a, const phong::Columns& X, const double* c, long nv, double* o,
-                                   const int* list, long k0, long k1, bool (*one_vertex)(const void*, long),
-                                   const void* context) {
+MSD_AVX2 bool reconstruct_local_x4(const FrameArrays& a, const phong::Columns& X, const double* c, long nv,
+                                   double* o, const int* list, long k0, long k1,
+                                   bool (*one_vertex)(const void*, long), const void* context) {
   const __m256d zero = _mm256_setzero_pd(), min_normal = _mm256_set1_pd(kMinNormalFraction);
   const __m256d min_tangent2 = _mm256_set1_pd(kMinTangentFraction * kMinTangentFraction);
   __m256d check = zero;
@@ -138,8 +138,9 @@ MSD_AVX2 bool reconstruct_local_x4(const FrameArrays& a, const phong::Columns& X
       weight = _mm256_add_pd(weight, r[3]);
     }
     const __m256d len = _mm256_sqrt_pd(square_sum_x4(sx, sy, sz));
-    const __m256d has_normal = _mm256_and_pd(_mm256_cmp_pd(len, _mm256_mul_pd(min_normal, weight), _CMP_GT_OQ),
-                                             _mm256_cmp_pd(len, zero, _CMP_GT_OQ));
+    const __m256d has_normal =
+        _mm256_and_pd(_mm256_cmp_pd(len, _mm256_mul_pd(min_normal, weight), _CMP_GT_OQ),
+                      _mm256_cmp_pd(len, zero, _CMP_GT_OQ));
     bool edges = true;
     for (int i = 0; i < 4; ++i) {
       edges = edges && a.offsets[v[i]] < a.offsets[v[i] + 1];
@@ -155,9 +156,9 @@ MSD_AVX2 bool reconstruct_local_x4(const FrameArrays& a, const phong::Columns& X
     __m256d tx = _mm256_sub_pd(ex, _mm256_mul_pd(en, nx)), ty = _mm256_sub_pd(ey, _mm256_mul_pd(en, ny)),
             tz = _mm256_sub_pd(ez, _mm256_mul_pd(en, nz));
     const __m256d t_len2 = square_sum_x4(tx, ty, tz);
-    const __m256d has_tangent =
-        _mm256_and_pd(_mm256_cmp_pd(t_len2, _mm256_mul_pd(min_tangent2, square_sum_x4(ex, ey, ez)), _CMP_GT_OQ),
-                      _mm256_cmp_pd(t_len2, zero, _CMP_GT_OQ));
+    const __m256d has_tangent = _mm256_and_pd(
+        _mm256_cmp_pd(t_len2, _mm256_mul_pd(min_tangent2, square_sum_x4(ex, ey, ez)), _CMP_GT_OQ),
+        _mm256_cmp_pd(t_len2, zero, _CMP_GT_OQ));
     if (!edges || _mm256_movemask_pd(_mm256_and_pd(has_normal, has_tangent)) != 0xF) {
       for (int i = 0; i < 4; ++i) ok &= one_vertex(context, v[i]);
       continue;
@@ -381,7 +382,8 @@ void DisplacementVectors::reconstruct(const Positions& B_deformed, Positions& ou
 #if MSD_HAVE_AVX2_KERNELS
       if (cpu_has_avx2()) {
         const FrameArrays arrays{frames_.face_offsets_.data(), frames_.incident_faces_.data(),
-                                 frames_.offsets_.data(), frames_.neighbours_.data(), frames_.face_normals_.data()};
+                                 frames_.offsets_.data(), frames_.neighbours_.data(),
+                                 frames_.face_normals_.data()};
         const auto scalar = [](const void* one_vertex, long v) {
           return (*static_cast<const decltype(one)*>(one_vertex))(v);
         };

@@ -43,8 +43,8 @@ inline bool normal_range(double d) {
 
 // count()'s pass over stored triangles [begin, end): adds the folded ones to `folded` and those whose product
 // of normals is not in normal_range() (and that have a rest sign) to `unsure`.
-void count_folds(const phong::Columns& s, const int* fs, const phong::Columns& b, const int* fb, const int* ref,
-                 const signed char* rest, long begin, long end, int& folded, int& unsure) {
+void count_folds(const phong::Columns& s, const int* fs, const phong::Columns& b, const int* fb,
+                 const int* ref, const signed char* rest, long begin, long end, int& folded, int& unsure) {
   int n = 0, u = 0;
   for (long f = begin; f < end; ++f) {
     // Folded when the orientation changed sign: (n_S' · n_B') · rest < 0. Branch-free: a data-dependent
@@ -100,7 +100,8 @@ MSD_AVX2 void count_folds_x4(const phong::Columns& s, const int* fs, const phong
     const __m256d in_range =
         _mm256_and_pd(_mm256_cmp_pd(m, smallest, _CMP_GE_OQ), _mm256_cmp_pd(m, largest, _CMP_LE_OQ));
     n += __builtin_popcount(_mm256_movemask_pd(_mm256_cmp_pd(_mm256_mul_pd(d, r), zero, _CMP_LT_OQ)));
-    u += __builtin_popcount(_mm256_movemask_pd(_mm256_andnot_pd(in_range, _mm256_cmp_pd(r, zero, _CMP_NEQ_OQ))));
+    u += __builtin_popcount(
+        _mm256_movemask_pd(_mm256_andnot_pd(in_range, _mm256_cmp_pd(r, zero, _CMP_NEQ_OQ))));
   }
   folded += n, unsure += u;
   count_folds(s, fs, b, fb, ref, rest, f, end, folded, unsure);

@@ -60,7 +60,8 @@ std::string check_decomposition(const DecompositionReport& r, const Decompositio
   if (c.folding_vertices > static_cast<long>(1e-3 * static_cast<double>(num_vertices)))
     throw TopologyError("decompose: the details fold over at rest (" + vertices +
                         " with a height above the base's curvature radius; " + where + "): " + remedy(r));
-  if (folds) return "decompose: the details of " + vertices + " fold over at rest (" + where + "): " + remedy(r);
+  if (folds)
+    return "decompose: the details of " + vertices + " fold over at rest (" + where + "): " + remedy(r);
   return std::string("decompose: the details come close to folding over the base (") + where +
          "); an edit that bends the base further may fold them: " + remedy(r);
 }

@@ -50,11 +50,13 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
   } catch (const InvalidInput& e) {  // a refusal of the mesh's structure (a fan too large to factor): S's too
     throw InvalidInput(name_ + ": the base deformer " + base_deformer_->name() + " on the base B: " + e.what());
   } catch (const Error& e) {  // a numerical or topological failure: of B, or of S that B inherited
-    const char* cause = d.base_is_input
-                            ? "the input mesh (the base is the mesh itself here); it is degenerate there, repair it: "
-                            : "the base B. Where the input mesh is degenerate too (the method alone fails on it), "
-                              "repair the input; otherwise the base is, and a smaller detail scale may help: ";
-    throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on " + cause + e.what());
+    const char* cause =
+        d.base_is_input
+            ? "the input mesh (the base is the mesh itself here); it is degenerate there, repair it: "
+            : "the base B. Where the input mesh is degenerate too (the method alone fails on it), "
+              "repair the input; otherwise the base is, and a smaller detail scale may help: ";
+    throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on " + cause +
+                      e.what());
   }
   // B has S's outliers: Deformer::prepare has warned about them on S already.
   const auto about_outliers = [](const std::string& w) { return w.find(kOutlierWarning) != std::string::npos; };
@@ -134,11 +136,12 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
   for (const std::string& w : base.warnings) r.warnings.push_back(w);
   r.folded_faces = fold_check_.count(out, base_deformed_, transforms);
   if (r.folded_faces > 0)
-    r.warnings.push_back(name_ + ": " + std::to_string(r.folded_faces) +
-                         (r.folded_faces == 1 ? " triangle" : " triangles") + " folded over the deformed base; " +
-                         (d.hierarchy ? "a finer control mesh or the low-pass base keeps them apart"
-                                      : "a smaller detail scale keeps them apart (the other encodings fold more or less "
-                                        "depending on the edit: msdeform compare measures them)"));
+    r.warnings.push_back(
+        name_ + ": " + std::to_string(r.folded_faces) + (r.folded_faces == 1 ? " triangle" : " triangles") +
+        " folded over the deformed base; " +
+        (d.hierarchy ? "a finer control mesh or the low-pass base keeps them apart"
+                     : "a smaller detail scale keeps them apart (the other encodings fold more or less "
+                       "depending on the edit: msdeform compare measures them)"));
 }
 
 void MultiscaleDeformer::do_reset() {

@@ -93,7 +93,8 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
                           ? " besides the input's own " + std::to_string(r.rest_self_intersections)
                           : std::string());
         if (r.folded_faces > 0)
-          a.reason += (a.reason.empty() ? "" : "; ") + std::to_string(r.folded_faces) + (r.folded_faces == 1 ? " triangle" : " triangles") + " folded over the base";
+          a.reason += (a.reason.empty() ? "" : "; ") + std::to_string(r.folded_faces) +
+                      (r.folded_faces == 1 ? " triangle" : " triangles") + " folded over the base";
         continue;
       }
       // Without a self-intersection count, nothing says the result is unbroken: at most fair, and said so.

@@ -204,8 +204,8 @@ void add_deform_command(CLI::App& app) {
                                               : "; arap keeps the proportions best");
     if (report.folded_faces > 0) std::fprintf(stderr, "advice: %s\n", fold_advice(*deformer).c_str());
     for (size_t k = 0; k < c.transforms.size(); ++k) {
-      // The numerical rank (singular values above 1e-12 of the largest) decides: below 3 the map keeps as many
-      // dimensions of the handle (a plane, a line, a point); at 3 a negative determinant (of A over its
+      // The numerical rank (singular values above 1e-12 of the largest) decides: below 3 the map keeps as
+      // many dimensions of the handle (a plane, a line, a point); at 3 a negative determinant (of A over its
       // largest singular value, which neither underflows nor overflows) is a reflection.
       const Mat3 A = c.transforms[k].topLeftCorner<3, 3>();
       const Vec3 sigma = Eigen::JacobiSVD<Mat3>(A).singularValues();
@@ -216,8 +216,8 @@ void add_deform_command(CLI::App& app) {
                          : rank == 2 ? "singular: it flattens the handle onto a plane"
                          : rank == 1 ? "singular: it collapses the handle onto a line"
                                      : "singular: it collapses the handle to a point";
-      std::fprintf(stderr, "warning: the transform of handle %zu is %s (singular values %.3g, %.3g, %.3g)\n", k,
-                   what, sigma(0), sigma(1), sigma(2));
+      std::fprintf(stderr, "warning: the transform of handle %zu is %s (singular values %.3g, %.3g, %.3g)\n",
+                   k, what, sigma(0), sigma(1), sigma(2));
     }
     std::printf("  wrote %s\n", output->c_str());
   });

@@ -330,20 +330,23 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
     load_soup(write("plain.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), &report);
     CHECK(report.first_attribute_line == 0);
   }
-  // The longest header prefix, texture coordinates, colours and normals: read past (it was "not an OFF file").
+  // The longest header prefix, texture coordinates, colours and normals: read past (it was "not an OFF
+  // file").
   {
     LoadReport report;
-    const TriangleSoup soup = load_soup(
-        write("stcn.off", "STCNOFF\n3 1 0\n0 0 0 0 0 1 0 0 1 0 0 1\n1 0 0 1 0 1 0 0 1 0 0 1\n0 1 0 0 1 1 0 0 1 0 0 1\n3 0 1 2\n"),
-        &report);
+    const TriangleSoup soup = load_soup(write("stcn.off",
+                                              "STCNOFF\n3 1 0\n0 0 0 0 0 1 0 0 1 0 0 1\n1 0 0 1 0 1 0 0 1 0 "
+                                              "0 1\n0 1 0 0 1 1 0 0 1 0 0 1\n3 0 1 2\n"),
+                                        &report);
     CHECK(soup.P.rows() == 3);
     CHECK(report.first_attribute_line == 3);
   }
   CHECK_THROWS_WITH(load_soup(write("stc4.off", "STC4OFF\n3 1 0\n0 0 0 1\n1 0 0 1\n0 1 0 1\n3 0 1 2\n")),
                     Contains("(homogeneous or n-dimensional coordinates) is not supported"));
   // Words after a record are not colours: refused by name (they were dropped without a word).
-  CHECK_THROWS_WITH(load_soup(write("face-junk.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 trailing junk\n")),
-                    Contains("line 6") && Contains("'trailing' after face 0's indices is not a number"));
+  CHECK_THROWS_WITH(
+      load_soup(write("face-junk.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 trailing junk\n")),
+      Contains("line 6") && Contains("'trailing' after face 0's indices is not a number"));
   CHECK_THROWS_WITH(load_soup(write("vertex-junk.off", "OFF\n3 1 0\n0 0 0\n1 0 0 7 x\n0 1 0\n3 0 1 2\n")),
                     Contains("line 4") && Contains("'x' after vertex 1's coordinates is not a number"));
   // A face with two corners is named, not taken for a short file (the byte count assumed 3 corners).

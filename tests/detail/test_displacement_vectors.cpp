@@ -274,8 +274,10 @@ TEST_CASE("displacement vectors: placed vertices are skipped, the others reconst
   CHECK_FALSE(bad.encoded());
 }
 
-TEST_CASE("displacement vectors: every reconstructed vertex follows (9.8) with its frame, also where frames fall back",
-          "[detail][vectors]") {
+TEST_CASE(
+    "displacement vectors: every reconstructed vertex follows (9.8) with its frame, also where frames fall "
+    "back",
+    "[detail][vectors]") {
   // The frame loop runs four vertices at a time where the CPU allows; each vertex must still get exactly
   // b' + α n' + β t1' + γ t2' with VertexFrames' frame. A bent bar with a collapsed disc (vertices without
   // normal), plus the spiked fan (first edges along the normal) as a second component, and a vertex count

@@ -183,6 +183,12 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
   const long nv = parse_number<long>(glued.empty() ? next_token(line) : glued, reader, "the vertex count");
   const long nf = parse_number<long>(next_token(line), reader, "the face count");
   if (nv < 0 || nf < 0) reader.fail("negative vertex or face count");
+  // The edge count (optional, unused), then nothing: records start on the next line, one per line.
+  next_token(line);
+  if (const std::string_view rest = next_token(line); !rest.empty())
+    reader.fail("the counts line goes on after the vertex, face and edge counts with '" +
+                printable(rest.substr(0, 40)) + "'; an OFF file has one vertex or face per line, starting on "
+                "the line after the counts");
   // A vertex takes at least 6 bytes ("0 0 0\n"), a face record at least 2 (its corner count: a face with too
   // few corners is then named by the face reader, not taken for a short file); the last line may lack its
   // newline. Counts the rest of the file cannot hold are refused before anything is allocated.

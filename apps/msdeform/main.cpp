@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <iostream>
 #include <string>
+#include <string_view>
 
 #include "apps/msdeform/commands.h"
 #include "msdeform/core/blas_kernels.h"
@@ -70,6 +71,13 @@ int main(int argc, char** argv) {
   msd::cli::add_render_command(app);
   msd::cli::add_view_command(app);
   add_common_checks(app);
+  // CLI11 takes "--name=" with nothing after the '=' as a missing value and reads the next argument in its
+  // place: the error would then name that argument, or a flag's value would be swallowed.
+  for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i)
+    if (const std::string_view arg = argv[i]; arg.size() > 3 && arg.substr(0, 2) == "--" && arg.back() == '=') {
+      std::cerr << arg << ": no value after '='\nRun with --help or --help-all for more information.\n";
+      return 2;
+    }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

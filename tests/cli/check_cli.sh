@@ -45,6 +45,8 @@ name=$(printf 'b%.0s' $(seq 246)).off
 # Usage errors exit 2 (CLI11's own codes, 105 and up, before).
 expect_error 2 "not in range 1 to 1000000" "$msdeform" deform --scene lift --method arap --iterations 0 -o x.off
 expect_error 2 "--bogus" "$msdeform" deform --scene lift --bogus -o x.off
+# "--kb=" with nothing after '=': CLI11 would read the next argument as its value and blame that.
+expect_error 2 "--kb=: no value after '='" "$msdeform" deform --scene lift --kb= --ks 1 -o x.off
 # An output path that is an existing folder without an extension said "unknown format ''".
 mkdir -p out-folder
 expect_error 1 "out-folder is a folder; give a mesh file name" "$msdeform" deform --scene lift -o out-folder

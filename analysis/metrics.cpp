@@ -297,17 +297,20 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
   ShapeChange c;
   long stretched = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    // Each edge with a free vertex, seen from its triangles: an interior edge is seen twice, which weights
-    // the share alike for every edge and leaves the largest factor unchanged.
+    // Each edge with a free vertex or between vertices placed by different transforms (fixed and a
+    // handle, two handles: torn apart by the edit), seen from its triangles: an interior edge is seen twice,
+    // which weights the share alike for every edge and leaves the largest factor unchanged.
     for (int k = 0; k < 3; ++k) {
       const int i = F(f, k), j = F(f, (k + 1) % 3);
-      if (region.code(i) != Region::kFree && region.code(j) != Region::kFree) continue;
+      if (region.code(i) == region.code(j) && region.code(i) != Region::kFree) continue;  // placed together
       const double l = (rest.row(i) - rest.row(j)).norm(), l1 = (deformed.row(i) - deformed.row(j)).norm();
       if (!(l > 0)) continue;
       const double factor = l1 > 0 ? std::max(l1 / l, l / l1) : INFINITY;
       ++c.edges;
       stretched += factor > 1.5;
-      if (factor > c.largest_factor) c.largest_factor = factor, c.largest_vertex = region.code(i) == Region::kFree ? i : j;
+      if (factor > c.largest_factor)  // named by its free vertex, else by its handle vertex
+        c.largest_factor = factor,
+        c.largest_vertex = region.code(i) == Region::kFree || region.code(j) == Region::kFixed ? i : j;
     }
   }
   if (c.edges > 0) {

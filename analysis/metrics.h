@@ -188,7 +188,7 @@ std::optional<double> volume_change(const Positions& rest, const Positions& defo
 //! under large rotations by shrinking, ballooning or shearing the free region (seed 9.2, 9.4); the space
 //! methods pinch and amplify between handles close together (seed 9.5): both show here.
 struct ShapeChange {
-  long edges = 0;                //!< edges with a free vertex (the ones measured)
+  long edges = 0;                //!< edges with a free vertex, or between differently placed ones (measured)
   double stretched_share = 0;    //!< of those, the share whose length changed more than 1.5× (grown or shrunk)
   double largest_factor = 1;     //!< the largest change max(l'/l, l/l') of such an edge (inf: one collapsed)
   int largest_vertex = -1;       //!< a vertex of that edge

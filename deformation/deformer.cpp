@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
@@ -10,6 +13,36 @@
 #include "msdeform/core/surface_check.h"
 
 namespace msd {
+namespace {
+
+std::string role(const Region& region, int v) {
+  return region.is_fixed(v) ? "fixed" : "handle " + std::to_string(region.handle_of(v));
+}
+
+// Edges whose two vertices the edit places itself, by different transforms (fixed and a handle, or two
+// handles): no free vertex lies between them, so no method can keep them from stretching as the handles
+// move. Empty when there are none.
+std::string torn_edges_warning(const Faces& F, const Region& region, const std::string& who) {
+  std::vector<std::pair<int, int>> torn;  // (smaller, larger) vertex, once per triangle that has the edge
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int i = F(f, k), j = F(f, (k + 1) % 3);
+      if (region.code(i) != region.code(j) && region.code(i) != Region::kFree && region.code(j) != Region::kFree)
+        torn.emplace_back(std::min(i, j), std::max(i, j));
+    }
+  if (torn.empty()) return {};
+  std::sort(torn.begin(), torn.end());
+  const long edges = std::unique(torn.begin(), torn.end()) - torn.begin();
+  const auto [a, b] = torn.front();
+  const bool no_free = region.free_vertices().empty();
+  return who + ": " + (no_free ? "the region has no free vertex, and " : "") + std::to_string(edges) +
+         (edges == 1 ? " edge joins " : " edges join ") + kTornEdgesWarning + " (e.g. vertex " +
+         std::to_string(a) + ", " + role(region, a) + ", and vertex " + std::to_string(b) + ", " + role(region, b) +
+         "): nothing deforms between them, so they stretch or tear as the handles move; leave free vertices "
+         "between the fixed part and each handle";
+}
+
+}  // namespace
 
 void check_affine(const std::vector<Mat4>& transforms, const std::string& who) {
   for (size_t k = 0; k < transforms.size(); ++k) {
@@ -36,6 +69,8 @@ void affine_targets(const Positions& rest, const std::vector<int>& constrained, 
 
 void Deformer::prepare(const Positions& P, const Faces& F, const Region& region) {
   prepared_ = false;
+  prepare_failed_ = true;  // until do_prepare() returns
+  num_handles_ = num_vertices_ = num_constrained_ = 0;
   frame_report_ = {};
   prepare_warnings_.clear();
   const bool surface = traits().domain == DeformerDomain::Surface;
@@ -61,7 +96,10 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
   region.validate(static_cast<int>(P.rows()), surface ? &F : nullptr);
   if (region.num_handles() == 0)
     throw InvalidInput(name() + ": the region has no handle vertex (selection code 2 or higher); nothing to move");
+  if (std::string torn = torn_edges_warning(F, region, name()); !torn.empty())
+    prepare_warnings_.push_back(std::move(torn));
   do_prepare(P, F, region);
+  prepare_failed_ = false;
   num_handles_ = region.num_handles();
   num_vertices_ = region.num_vertices();
   num_constrained_ = static_cast<int>(region.constrained_vertices().size());
@@ -71,7 +109,9 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
 void Deformer::prepare(const Mesh& mesh, const Region& region) { prepare(positions(mesh), faces(mesh), region); }
 
 void Deformer::begin_frame(Positions& out) {
-  if (!prepared_) throw UsageError(name() + ": a frame was asked for before prepare()");
+  if (!prepared_)
+    throw UsageError(name() + (prepare_failed_ ? ": the last prepare() failed; a frame needs one that succeeded"
+                                               : ": a frame was asked for before prepare()"));
   if (out.rows() != num_vertices_) out.resize(num_vertices_, 3);
   frame_report_.iterations = 0;
   frame_report_.residual = -1;
@@ -156,6 +196,10 @@ void Deformer::evaluate(const Positions& points, Positions& out) const {
   check_finite(points, name().c_str(), "the points");
   if (out.rows() != points.rows()) out.resize(points.rows(), 3);
   do_evaluate(points, out);
+  if (const long i = first_non_finite_row(out); i >= 0)  // e.g. a polynomial map overflowed far away
+    throw SolverError(name() + ": the map sends point " + std::to_string(i) + " (" + format_number(points(i, 0)) +
+                      ", " + format_number(points(i, 1)) + ", " + format_number(points(i, 2)) +
+                      ") to a non-finite position; it lies too far from the handles for this method");
 }
 
 void Deformer::do_evaluate(const Positions&, Positions&) const {

@@ -161,6 +161,7 @@ class Deformer {
  private:
   std::function<void(const std::string&)> progress_;
   bool prepared_ = false;
+  bool prepare_failed_ = false;  // the last prepare() threw (a frame's error says so)
   bool output_checked_finite_ = false;  // set_output_checked_finite() in this frame
   int num_handles_ = 0, num_vertices_ = 0, num_constrained_ = 0;
 };
@@ -188,6 +189,10 @@ class LocalFrameDeformer : public Deformer {
   Positions rest_, targets_;  // the caller's frame
   std::vector<int> constrained_, handle_of_;
 };
+
+//! In the prepare warning about edges joining vertices that different transforms place (fixed and a
+//! handle, or two handles, with no free vertex between them to deform).
+constexpr const char* kTornEdgesWarning = "vertices placed by different transforms";
 
 //! Throws InvalidInput unless every transform is finite with last row (0 0 0 1); `who` prefixes the message.
 void check_affine(const std::vector<Mat4>& transforms, const std::string& who);

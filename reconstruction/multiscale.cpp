@@ -58,11 +58,16 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
     throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on " + cause +
                       e.what());
   }
-  // B has S's outliers: Deformer::prepare has warned about them on S already.
-  const auto about_outliers = [](const std::string& w) { return w.find(kOutlierWarning) != std::string::npos; };
-  const bool outliers_said = std::any_of(prepare_warnings_.begin(), prepare_warnings_.end(), about_outliers);
-  for (const std::string& w : base_deformer_->prepare_warnings())
-    if (!(outliers_said && about_outliers(w))) prepare_warnings_.push_back(w);
+  // B has S's outliers and S's region: Deformer::prepare has warned about their outliers and torn edges on
+  // S already.
+  for (const std::string& w : base_deformer_->prepare_warnings()) {
+    const auto said = [&](const char* what) {
+      return w.find(what) != std::string::npos &&
+             std::any_of(prepare_warnings_.begin(), prepare_warnings_.end(),
+                         [&](const std::string& v) { return v.find(what) != std::string::npos; });
+    };
+    if (!said(kOutlierWarning) && !said(kTornEdgesWarning)) prepare_warnings_.push_back(w);
+  }
   encoding_->set_anchor_vertices(region.constrained_vertices());
   encoding_->set_placed_vertices(region.constrained_vertices());  // do_deform places them itself
   if (!d.base_is_input) {

@@ -199,20 +199,25 @@ msd::Faces to_faces(py::handle obj, const char* what, long num_vertices) {
                          std::string(py::str(a.dtype())));
   if (a.ndim() != 2 || a.shape(1) != 3)
     throw py::value_error(name + " must have shape (F, 3) (triangles), got shape " + shape_of(a));
-  auto d = py::array_t<long long, py::array::forcecast>::ensure(a);
-  if (!d) throw py::error_already_set();
-  const auto u = d.unchecked<2>();
-  msd::Faces F(u.shape(0), 3);
-  for (py::ssize_t i = 0; i < u.shape(0); ++i)
-    for (py::ssize_t j = 0; j < 3; ++j) {
-      const long long v = u(i, j);
-      if (v < 0 || v > INT_MAX || (num_vertices >= 0 && v >= num_vertices))
-        throw py::value_error(name + "[" + std::to_string(i) + ", " + std::to_string(j) + "] = " + std::to_string(v) +
-                              " is not a vertex index" +
-                              (num_vertices >= 0 ? " (there are " + std::to_string(num_vertices) + " vertices)" : ""));
-      F(i, j) = static_cast<int>(v);
-    }
-  return F;
+  // Read in the array's signedness: an unsigned 2⁶⁴ − 1 read as signed would be named as −1.
+  const auto copy = [&](auto tag) {
+    using Index = decltype(tag);
+    auto d = py::array_t<Index, py::array::forcecast>::ensure(a);
+    if (!d) throw py::error_already_set();
+    const auto u = d.template unchecked<2>();
+    msd::Faces F(u.shape(0), 3);
+    for (py::ssize_t i = 0; i < u.shape(0); ++i)
+      for (py::ssize_t j = 0; j < 3; ++j) {
+        const Index v = u(i, j);
+        if (v < 0 || v > INT_MAX || (num_vertices >= 0 && v >= static_cast<Index>(num_vertices)))
+          throw py::value_error(name + "[" + std::to_string(i) + ", " + std::to_string(j) + "] = " +
+                                std::to_string(v) + " is not a vertex index" +
+                                (num_vertices >= 0 ? " (there are " + std::to_string(num_vertices) + " vertices)" : ""));
+        F(i, j) = static_cast<int>(v);
+      }
+    return F;
+  };
+  return a.dtype().kind() == 'u' ? copy(0ULL) : copy(0LL);
 }
 
 std::vector<int> to_codes(py::handle obj, const char* what, long n) {

@@ -297,6 +297,19 @@ def test_prepare_errors(lift):
     lonely = np.vstack([V, [[5.0, 5.0, 5.0]]])
     with pytest.raises(msdeform.TopologyError, match=r"free vertex %d is used by no face" % len(V)):
         msdeform.Deformer("shell").prepare(lonely, F, np.append(labels, 1))
+    # An unsigned index is named as it is (2**64 - 1 was shown as -1).
+    huge = F.astype(np.uint64)
+    huge[5, 1] = np.iinfo(np.uint64).max
+    with pytest.raises(ValueError, match=r"F\[5, 1\] = 18446744073709551615 is not a vertex index"):
+        d.prepare(V, huge, labels)
+    # A prepare the method refuses leaves nothing of the last good one (num_vertices, num_handles were
+    # stale). (Arrays refused before the call, like `worse` above, leave the deformer as it was.)
+    d.prepare(V, F, labels)
+    with pytest.raises(ValueError, match="surface method needs triangles"):
+        d.prepare(V, None, labels)
+    assert not d.prepared and d.num_vertices == 0 and d.num_handles == 0
+    with pytest.raises(msdeform.UsageError, match=r"the last prepare\(\) failed"):
+        d.deform([np.eye(4)])
 
 
 def test_deform_to_matches_affine_targets(lift, prepared):
@@ -324,6 +337,9 @@ def test_space_methods_evaluate_their_map_anywhere(lift, prepared):
     assert mid.shape == (1, 3) and 0 < mid[0, 2] < 0.3
     with pytest.raises(msdeform.UsageError, match="surface method"):
         prepared("shell").evaluate(lift.V)
+    # A point so far away that the map overflows is named (it returned NaN).
+    with pytest.raises(msdeform.SolverError, match=r"sends point 0 \(1e\+103, 0, 0\) to a non-finite position"):
+        rbf.evaluate([[1e103, 0, 0]])
 
 
 def test_space_methods_take_point_clouds(lift):

@@ -320,8 +320,16 @@ TEST_CASE("shape change: lengths, area and volume around the free region, and wh
   CHECK(t.largest_factor > 5);
   CHECK(t.largest_vertex == 100);
   CHECK_THAT(shape_change_warning(t), Contains("an edge at vertex 100 stretched or shrank"));
-  // Only edges with a free vertex count: all fixed, nothing measured.
+  // Edges within one rigidly placed group do not count: all fixed, nothing measured.
   const ShapeChange none = shape_change(s.P, torn, s.F, Region(static_cast<int>(s.P.rows()), Region::kFixed));
   CHECK(none.edges == 0);
+  // Edges between a fixed vertex and a handle do, free vertices or not (no free vertex: they were not
+  // measured, and a handle torn off the mesh passed without a word).
+  std::vector<int> codes(s.P.rows(), Region::kFixed);
+  codes[100] = Region::kFirstHandle;
+  const ShapeChange handle_torn = shape_change(s.P, torn, s.F, Region::from_codes(codes));
+  CHECK(handle_torn.edges > 0);
+  CHECK(handle_torn.largest_factor > 5);
+  CHECK(handle_torn.largest_vertex == 100);
   CHECK_THROWS_AS(shape_change(s.P, torn.topRows(10), s.F, region), InvalidInput);
 }

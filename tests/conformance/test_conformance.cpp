@@ -303,6 +303,42 @@ TEST_CASE("conformance: the bad-input corpus gives an error or a finite result",
   });
 }
 
+TEST_CASE("conformance: a handle touching the fixed part is warned about, and a failed prepare leaves no state",
+          "[conformance][bad-input]") {
+  SceneOptions o;
+  o.resolution = 600;
+  const Scene s = make_scene("bar-bend120", o);
+  const int nv = static_cast<int>(s.P.rows());
+  std::vector<int> codes = s.region.codes();  // no free vertex: the handle is torn off the fixed part
+  for (int& c : codes)
+    if (c == Region::kFree) c = Region::kFixed;
+  const Region touching = Region::from_codes(codes);
+  for_every_method([&](Deformer& d) {
+    // A good edit warns about nothing of the kind.
+    d.prepare(s.P, s.F, s.region);
+    for (const std::string& w : d.prepare_warnings()) CHECK_THAT(w, !Contains("placed by different transforms"));
+    // Without free vertices (it passed without a word: the handle floated off on stretched edges), once.
+    try {
+      d.prepare(s.P, s.F, touching);
+      int said = 0;
+      for (const std::string& w : d.prepare_warnings())
+        said += w.find("the region has no free vertex, and") != std::string::npos &&
+                w.find("edges join vertices placed by different transforms") != std::string::npos;
+      CHECK(said == 1);
+    } catch (const Error& e) {
+      CHECK(std::string(e.what()).size() > 10);
+    }
+    // After a failed prepare the deformer holds no preparation, and a frame says why.
+    Faces F = s.F;
+    F(3, 1) = nv + 5;
+    CHECK_THROWS_AS(d.prepare(s.P, F, s.region), Error);
+    CHECK_FALSE(d.prepared());
+    CHECK(d.num_handles() == 0);
+    CHECK(d.num_vertices() == 0);
+    CHECK_THROWS_WITH(d.deform(s.transforms), Contains("the last prepare() failed"));
+  });
+}
+
 TEST_CASE("conformance: the catalogue refuses unknown and duplicate names", "[conformance]") {
   CHECK_THROWS_WITH(builtin_methods().make("shel"), Contains("unknown method 'shel'") && Contains("shell"));
   Catalogue c = builtin_methods();

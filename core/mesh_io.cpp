@@ -838,6 +838,11 @@ void save_mesh(const Positions& P, const Faces& F, const std::string& path, cons
     if (options.vertex_scalar->size() != P.rows())
       throw InvalidInput("save_mesh: " + path + ": " + std::to_string(options.vertex_scalar->size()) +
                          " scalars for " + std::to_string(P.rows()) + " vertices");
+    const std::string& name = options.scalar_name;  // a PLY word, and not a coordinate's name
+    if (name.empty() || name == "x" || name == "y" || name == "z" ||
+        std::any_of(name.begin(), name.end(), [](char c) { return !std::isgraph(static_cast<unsigned char>(c)); }))
+      throw InvalidInput("save_mesh: " + path + ": the scalar's property name '" + printable(name.substr(0, 40)) +
+                         "' must be one word of visible characters other than x, y and z; nothing written");
   }
   const long nv = P.rows(), nf = F.rows();
   std::string out;

@@ -57,7 +57,8 @@ struct SaveOptions {
 //! renamed, so a failed save leaves any existing file untouched. Full double precision (STL: single).
 //! Any face list is written as it is: a soup, or none at all (a point cloud) in .off, .obj and .ply.
 //! STL keeps no vertex list: vertices no face uses are lost, and a point cloud is refused.
-//! \throw InvalidInput for an unknown extension, a scalar with a non-PLY format or of the wrong size,
+//! \throw InvalidInput for an unknown extension, a scalar with a non-PLY format, of the wrong size or
+//! with a name PLY readers would misread (empty, with spaces or control characters, or x, y, z),
 //! non-finite positions, an STL without faces, or an unwritable path.
 void save_mesh(const Positions& P, const Faces& F, const std::string& path, const SaveOptions& options = {});
 void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& options = {});

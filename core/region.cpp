@@ -9,6 +9,7 @@
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/atomic_file.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 
 namespace msd {
 
@@ -225,6 +226,13 @@ std::vector<Mat4> read_def(const std::string& path) {
 }
 
 void write_def(const std::vector<Mat4>& transforms, const std::string& path) {
+  for (size_t h = 0; h < transforms.size(); ++h) {  // what read_def refuses is not written
+    if (!transforms[h].allFinite())
+      throw InvalidInput("write_def: " + path + ": matrix " + std::to_string(h) + " has a non-finite entry");
+    if ((transforms[h].row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9)
+      throw InvalidInput("write_def: " + path + ": matrix " + std::to_string(h) +
+                         " is not affine (its last row must be 0 0 0 1)");
+  }
   std::ostringstream out;
   out.precision(17);
   for (size_t h = 0; h < transforms.size(); ++h) {
@@ -236,6 +244,8 @@ void write_def(const std::vector<Mat4>& transforms, const std::string& path) {
 }
 
 std::vector<int> select_box(const Positions& P, const Vec3& lo, const Vec3& hi) {
+  if (lo.array().isNaN().any() || hi.array().isNaN().any())
+    throw InvalidInput("select_box: a corner of the box is NaN");
   std::vector<int> out;
   for (int i = 0; i < P.rows(); ++i)
     if ((P.row(i).transpose().array() >= lo.array()).all() && (P.row(i).transpose().array() <= hi.array()).all())
@@ -244,6 +254,9 @@ std::vector<int> select_box(const Positions& P, const Vec3& lo, const Vec3& hi) 
 }
 
 std::vector<int> select_sphere(const Positions& P, const Vec3& center, double radius) {
+  if (!center.allFinite() || !(radius >= 0) || !std::isfinite(radius))
+    throw InvalidInput("select_sphere: the centre must be finite and the radius finite and >= 0, got radius " +
+                       format_number(radius));
   std::vector<int> out;
   for (int i = 0; i < P.rows(); ++i)
     if ((P.row(i).transpose() - center).squaredNorm() <= radius * radius) out.push_back(i);
@@ -251,6 +264,8 @@ std::vector<int> select_sphere(const Positions& P, const Vec3& center, double ra
 }
 
 std::vector<int> select_halfspace(const Positions& P, const Vec3& point, const Vec3& normal) {
+  if (!point.allFinite() || !normal.allFinite() || normal.cwiseAbs().maxCoeff() == 0)
+    throw InvalidInput("select_halfspace: the point and normal must be finite and the normal not zero");
   std::vector<int> out;
   for (int i = 0; i < P.rows(); ++i)
     if ((P.row(i).transpose() - point).dot(normal) >= 0) out.push_back(i);

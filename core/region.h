@@ -71,14 +71,15 @@ Region read_dmat_groups(const std::string& path, int num_vertices);
 //! \throw InvalidInput if the count is not a multiple of 16, a number is malformed or non-finite, or a
 //! last row is not (0 0 0 1).
 std::vector<Mat4> read_def(const std::string& path);
-//! Writes transforms as a .def file (atomically).
+//! Writes transforms as a .def file (atomically). \throw InvalidInput for what read_def refuses (a
+//! non-finite entry, a last row other than 0 0 0 1), before anything is written.
 void write_def(const std::vector<Mat4>& transforms, const std::string& path);
 
-//! Vertices inside the axis-aligned box [lo, hi].
+//! Vertices inside the axis-aligned box [lo, hi] (infinite corners allowed). \throw InvalidInput for a NaN corner.
 std::vector<int> select_box(const Positions& P, const Vec3& lo, const Vec3& hi);
-//! Vertices within radius of center.
+//! Vertices within radius of center. \throw InvalidInput for a negative or non-finite radius or centre.
 std::vector<int> select_sphere(const Positions& P, const Vec3& center, double radius);
-//! Vertices with (p - point) . normal >= 0.
+//! Vertices with (p - point) . normal >= 0. \throw InvalidInput for a zero or non-finite normal or point.
 std::vector<int> select_halfspace(const Positions& P, const Vec3& point, const Vec3& normal);
 
 //! Applies an affine 4x4 transform to a point.

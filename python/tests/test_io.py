@@ -44,6 +44,12 @@ def test_write_mesh_scalar_property(tmp_path, lift):
     assert b"property double height" in path.read_bytes()[:1000]
     with pytest.raises(ValueError, match="one value per vertex"):
         msdeform.write_mesh(path, lift.V, lift.F, scalar=lift.V[:10, 2])
+    # Names msdeform's own reader would refuse are refused before writing (the file stays as it was).
+    before = path.read_bytes()
+    for name in ["x", "a b", ""]:
+        with pytest.raises(ValueError, match="one word of visible characters other than x, y and z"):
+            msdeform.write_mesh(path, lift.V, lift.F, scalar=lift.V[:, 2], scalar_name=name)
+    assert path.read_bytes() == before
 
 
 def test_sel_round_trip(tmp_path, lift):
@@ -83,6 +89,14 @@ def test_read_def_refuses_a_matrix_that_is_not_affine(tmp_path):
     path.write_text("1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n")
     with pytest.raises(ValueError, match="0 0 0 1"):
         msdeform.read_def(path)
+    # ... and write_def does not write one (nor a NaN), so every file it writes reads back.
+    with pytest.raises(ValueError, match="matrix 0 is not affine"):
+        msdeform.write_def(tmp_path / "ones.def", np.ones((4, 4)))
+    nan = np.eye(4)
+    nan[0, 3] = np.nan
+    with pytest.raises(ValueError, match="matrix 0 has a non-finite entry"):
+        msdeform.write_def(tmp_path / "nan.def", nan)
+    assert not (tmp_path / "ones.def").exists() and not (tmp_path / "nan.def").exists()
 
 
 def test_dmat_groups_are_free_and_handles(tmp_path):

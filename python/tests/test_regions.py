@@ -58,6 +58,11 @@ def test_selection_helpers_match_numpy(lift):
     np.testing.assert_array_equal(half, np.flatnonzero(V[:, 0] >= 0.7))
     with pytest.raises(ValueError, match="3 numbers"):
         msdeform.select_sphere(V, (0.5, 0.5), 0.25)
+    # What the command line refuses (a negative radius selected by its square, a zero normal everything).
+    with pytest.raises(ValueError, match="radius finite and >= 0, got radius -1"):
+        msdeform.select_sphere(V, (0, 0, 0), -1)
+    with pytest.raises(ValueError, match="the normal not zero"):
+        msdeform.select_halfspace(V, (0, 0, 0), (0, 0, 0))
 
 
 def test_labels_are_validated_by_prepare(lift):

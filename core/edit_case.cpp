@@ -35,7 +35,14 @@ EditCase load_edit_case(const std::string& mesh, const std::string& sel, const s
   c.surface_problem = check_surface(c.P, c.F).problem();  // orients the faces where it can
   c.seam_vertices = count_seam_vertices(c.P, c.F);
   const int nv = static_cast<int>(c.P.rows());
-  if (!sel.empty()) c.region = file_extension(sel) == ".dmat" ? read_dmat_groups(sel, nv) : read_sel(sel, nv);
+  if (!sel.empty()) {
+    c.region = file_extension(sel) == ".dmat" ? read_dmat_groups(sel, nv) : read_sel(sel, nv);
+    try {  // a gap in the handle codes, before the handles are counted against the .def
+      c.region.validate(nv);
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(sel + ": " + e.what());
+    }
+  }
   if (!def.empty()) {
     c.transforms = read_def(def);
     if (!sel.empty() && static_cast<int>(c.transforms.size()) != c.region.num_handles())

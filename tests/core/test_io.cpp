@@ -285,6 +285,12 @@ TEST_CASE("an edit case keeps any input and says why a surface method cannot tak
   CHECK(repaired.F.row(1) == Eigen::RowVector3i(0, 2, 3));
   CHECK_NOTHROW(require_surface(repaired, "shell"));
   CHECK_NOTHROW(require_surface(scene_case("lift", 300), "shell"));
+  // A gap in the handle codes is named as such (the handles were counted as the largest code − 1 against
+  // the .def: "defines 3 handle(s)" for one handle, coded 4).
+  std::ofstream(tmp.file("gap.sel")) << "0\n1\n4\n";
+  std::ofstream(tmp.file("one.def")) << "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  CHECK_THROWS_WITH(load_edit_case(tmp.file("cloud.off"), tmp.file("gap.sel"), tmp.file("one.def")),
+                    Contains("gap.sel") && Contains("handle 0 (selection code 2) has no vertex"));
 }
 
 TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[core][io][bad-input]") {

@@ -99,7 +99,8 @@ void add_decompose_command(CLI::App& app) {
           std::printf("  remeshed to edge length %.4g: %d vertices (the output has the base's triangles, without "
                       "per-vertex heights)\n", report.remesh_edge_length, report.remeshed_vertices);
     }
-    print_check("  ", report.check);
+    if (report.kind != DecompositionKind::Remeshed)  // |S − B| per vertex needs B to have S's vertices
+      print_check("  ", report.check);
     std::printf("  normal-displacement heights in [%.4g, %.4g], mean |h| %.4g, %d vertices without a base point",
                 h.minCoeff(), h.maxCoeff(), h.cwiseAbs().mean(), details.report().fallback);
     if (unused > 0) std::printf(" (%ld vertices no face uses: height 0)", unused);

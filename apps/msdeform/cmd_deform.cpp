@@ -2,6 +2,7 @@
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "apps/msdeform/camera_options.h"
 #include "apps/msdeform/commands.h"
@@ -50,7 +51,8 @@ void add_deform_command(CLI::App& app) {
                   "along seams deforms as one surface; the output keeps the file's vertices and faces")
       ->check(CLI::Validator(
           [](std::string& text) {
-            return text.size() > 1 && text[0] == '-' ? std::string("a distance must be >= 0, got ") + text : std::string();
+            const std::optional<double> x = decimal_number(text);  // -0 is 0; a word is the parser's to name
+            return x && *x < 0 ? std::string("a distance must be >= 0, got ") + text : std::string();
           },
           "EPS>=0"));
   auto quiet = std::make_shared<bool>(false);

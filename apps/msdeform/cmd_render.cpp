@@ -1,3 +1,4 @@
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -8,6 +9,7 @@
 #include "msdeform/analysis/metrics.h"
 #include "msdeform/analysis/self_intersections.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/decomposition/low_pass.h"
 #include "msdeform/detail/normal_displacements.h"
@@ -98,6 +100,10 @@ void add_render_command(CLI::App& app) {
         throw InvalidInput("--color " + mode + ": not a colour mode (auto, region, detail, selfint, rigidity, none), "
                            "and " + c.path + " is not a PLY file, the only kind with named vertex properties");
       heights = load_vertex_property(c.path, name);
+      for (Eigen::Index v = 0; v < heights.size(); ++v)
+        if (!std::isfinite(heights[v]))
+          throw InvalidInput("--color " + mode + ": " + c.path + ": property '" + name + "' of vertex " +
+                             std::to_string(v) + " is " + format_number(heights[v]) + "; colours need finite values");
       o.vertex_scalar = &heights;
       o.scalar_label = name;
       std::printf("%s: values in [%.4g, %.4g]\n", name.c_str(), heights.minCoeff(), heights.maxCoeff());

@@ -78,6 +78,20 @@ int main(int argc, char** argv) {
       std::cerr << arg << ": no value after '='\nRun with --help or --help-all for more information.\n";
       return 2;
     }
+  // CLI11 reports an unknown first word as a missing subcommand.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      known = known || sub->check_name(argv[1]);
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::cerr << "unknown subcommand '" << argv[1] << "'; the subcommands are " << names
+                << " (the benchmarks are bench/run in the source tree)\nRun with --help for more information.\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -265,9 +265,11 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
       M.topRightCorner<3, 1>() = vec(numbers(option, s.value, {3}, "X,Y,Z"));
     } else if (s.option == rotate_) {
       const auto v = numbers(option, s.value, {4}, "AX,AY,AZ,DEGREES");
-      if (vec(v).squaredNorm() == 0) throw InvalidInput(option + ": the axis is zero");
+      const double largest = vec(v).cwiseAbs().maxCoeff();  // scaled first: 1e-300 squared underflows
+      if (largest == 0) throw InvalidInput(option + ": the axis is zero");
       add_turn(std::abs(v[3]), option);
-      M.topLeftCorner<3, 3>() = Eigen::AngleAxisd(v[3] * kPi / 180, vec(v).normalized()).toRotationMatrix();
+      M.topLeftCorner<3, 3>() =
+          Eigen::AngleAxisd(v[3] * kPi / 180, (vec(v) / largest).normalized()).toRotationMatrix();
     } else {
       const auto v = numbers(option, s.value, {1, 3}, "S or SX,SY,SZ");
       const Vec3 factors = v.size() == 1 ? Vec3::Constant(v[0]) : vec(v);

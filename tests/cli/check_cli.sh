@@ -47,6 +47,8 @@ expect_error 2 "not in range 1 to 1000000" "$msdeform" deform --scene lift --met
 expect_error 2 "--bogus" "$msdeform" deform --scene lift --bogus -o x.off
 # "--kb=" with nothing after '=': CLI11 would read the next argument as its value and blame that.
 expect_error 2 "--kb=: no value after '='" "$msdeform" deform --scene lift --kb= --ks 1 -o x.off
+expect_error 2 "unknown subcommand 'foo'; the subcommands are info, scene, deform" "$msdeform" foo
+expect_error 1 "--def lift.def: this command applies no handle transforms" "$msdeform" decompose lift.off --def lift.def -o b.ply
 # An output path that is an existing folder without an extension said "unknown format ''".
 mkdir -p out-folder
 expect_error 1 "out-folder is a folder; give a mesh file name" "$msdeform" deform --scene lift -o out-folder
@@ -117,6 +119,13 @@ grep -q "1 vertices no face uses: height 0" out.txt || { cat out.txt; fail "deco
 grep -q "detail scale candidate 1 of at most" err.txt || { cat err.txt; fail "decompose printed no candidates"; }
 "$msdeform" decompose lift.off -q -o lift-base.ply >out.txt 2>err.txt || { cat err.txt; fail "decompose -q"; }
 [ -s err.txt ] && { cat err.txt; fail "decompose -q printed progress"; }
+# A --mesh named like a built-in scene is kept apart (the two edits were merged into one row of verdicts
+# and one's meshes overwritten).
+"$msdeform" compare -q --scenes lift --resolution 300 --mesh lift.off --sel lift.sel --def lift.def --methods shell \
+  -o cmp-clash >out.txt 2>err.txt || { cat err.txt; fail "compare with a --mesh named like a scene"; }
+grep -q "note: two edits are named lift; the --mesh is called lift-2 here" err.txt || { cat err.txt; fail "no rename note"; }
+[ -f cmp-clash/meshes/lift--shell.ply ] && [ -f cmp-clash/meshes/lift-2--shell.ply ] ||
+  { ls cmp-clash/meshes; fail "the clashing edits do not have their own mesh files"; }
 # compare -o naming a file fails before any scene is built.
 touch not-a-folder
 expect_error 1 "is a file; compare writes a folder" "$msdeform" compare --scenes lift -o not-a-folder

@@ -166,6 +166,12 @@ expect_error 1 "'0x10' is not a finite decimal number" \
 expect_error 2 "--handle has no value before --translate" \
   "$msdeform" deform lift.off --fixed vertex:5,1 --handle --translate 0,0.1,0 -o x.off
 expect_error 1 "--rotate 0,0,0,30: the axis is zero" "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,0,0,30 -o x.off
+# A tiny axis has a direction (its square underflowed: "the axis is zero"); same result as a unit axis.
+"$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,0,1e-300,30 --method shell --write-def tiny.def -o tiny.off >/dev/null 2>&1 ||
+  fail "--rotate about a tiny axis"
+"$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,0,1,30 --method shell --write-def unit.def -o unit.off >/dev/null 2>&1 ||
+  fail "--rotate about a unit axis"
+cmp -s tiny.def unit.def || fail "a tiny axis gave another rotation than the unit axis"
 expect_error 1 "'nan' is not a finite decimal number" "$msdeform" deform lift.off --handle vertex:0,1 --translate nan,0,0 -o x.off
 expect_error 1 "not both" "$msdeform" deform lift.off --sel lift.sel --handle vertex:0,1 --translate 0,0,1 -o x.off
 expect_error 1 "not both" "$msdeform" deform lift.off --sel lift.sel --def lift.def --translate 0,0,1 -o x.off

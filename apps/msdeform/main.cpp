@@ -58,6 +58,8 @@ int main(int argc, char** argv) {
   msd::select_blas_kernels();  // before any thread uses BLAS (core/blas_kernels.h)
   CLI::App app{"msdeform: multi-scale, detail-preserving deformation of triangle meshes"};
   app.require_subcommand(1);
+  app.footer("The performance figures (prepare, frame, memory per method at a chosen size): bench/run in the "
+             "source tree (README, Benchmarks).");
   app.set_help_all_flag("--help-all", "Print help for all subcommands");
   app.set_version_flag("--version", [] {
     return std::string("msdeform ") + msd::version() + "\n" + msd::build_info() +

@@ -124,6 +124,9 @@ struct QueryState {
   // Candidates farther than this are not taken: a triangle whose box meets the starting sphere need not
   // itself lie within it. +∞ without a bound.
   double limit2 = std::numeric_limits<double>::infinity();
+  const int* face_group = nullptr;  // with it, only faces f with face_group[f] == group are candidates
+  int group = -1;
+  bool candidate(int f) const { return !face_group || face_group[f] == group; }
 };
 
 // Called by Embree for every triangle whose bounds meet the current query sphere: exact double-precision
@@ -131,6 +134,7 @@ struct QueryState {
 bool point_query_callback(RTCPointQueryFunctionArguments* args) {
   auto* state = static_cast<QueryState*>(args->userPtr);
   const int f = static_cast<int>(args->primID);
+  if (!state->candidate(f)) return false;
   const Faces& F = *state->F;
   const Positions& P = *state->P;
   Vec3 bary;
@@ -227,9 +231,11 @@ void ClosestPointQuery::build(const Positions& P, const Faces& F) {
   impl_ = std::move(impl);
 }
 
-ClosestPoint ClosestPointQuery::query(const Vec3& p, double max_distance) const {
+ClosestPoint ClosestPointQuery::query(const Vec3& p, double max_distance, const int* face_group, int group) const {
   if (!impl_) throw UsageError("ClosestPointQuery::query: called before build()");
   QueryState state{&impl_->P, &impl_->F, p, impl_->frame.scale, 0.0f, ClosestPoint{}};
+  state.face_group = face_group;
+  state.group = group;
   const Vec3 local = impl_->frame.to_local(p);
   const double magnitude = std::max(impl_->max_abs_coordinate, local.cwiseAbs().maxCoeff());
   state.slack = static_cast<float>(8.0 * FLT_EPSILON * magnitude) + FLT_MIN;
@@ -258,6 +264,7 @@ ClosestPoint ClosestPointQuery::query(const Vec3& p, double max_distance) const 
   }
   if (state.best.face < 0) {  // a query beyond float range of the frame: every triangle, exactly
     for (Eigen::Index f = 0; f < impl_->F.rows(); ++f) {
+      if (!state.candidate(static_cast<int>(f))) continue;
       Vec3 bary;
       const Vec3 q = closest_point_on_triangle(p, impl_->P.row(impl_->F(f, 0)), impl_->P.row(impl_->F(f, 1)),
                                                impl_->P.row(impl_->F(f, 2)), bary);

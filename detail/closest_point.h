@@ -50,8 +50,11 @@ class ClosestPointQuery {
   //! max_distance: a distance from p to some point of the mesh (a vertex a face uses, say), so at least the
   //! closest distance. The search starts with that sphere instead of an unbounded one, which prunes it; the
   //! result is the same (a bound that is too small only makes it search again without one).
+  //! face_group (#F entries, or null: every face) and group: only faces f with face_group[f] == group are
+  //! candidates (e.g. the connected component of the point's own vertex); face = −1 when none is.
   //! \throw UsageError before build().
-  ClosestPoint query(const Vec3& p, double max_distance = std::numeric_limits<double>::infinity()) const;
+  ClosestPoint query(const Vec3& p, double max_distance = std::numeric_limits<double>::infinity(),
+                     const int* face_group = nullptr, int group = -1) const;
 
   //! query() for every row of points (#Q by 3), in parallel. \throw UsageError before build().
   std::vector<ClosestPoint> query_all(const Positions& points) const;

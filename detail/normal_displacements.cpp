@@ -7,6 +7,7 @@
 #include <limits>
 #include <string>
 
+#include "msdeform/core/disjoint_sets.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/core/vector_kernels.h"
@@ -230,8 +231,7 @@ MSD_AVX2 void reconstruct_samples_x4(const Sample* samples, long begin, long end
 
 NormalDisplacements::NormalDisplacements(const NormalDisplacementOptions& options) : options_(options) {}
 
-void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const Positions& B,
-                                 const Faces& Fb) {
+void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) {
   const char* where = "NormalDisplacements::encode";
   if (options_.max_iterations < 0 || options_.max_walks < 0 || !(options_.tolerance > 0) ||
       !std::isfinite(options_.tolerance))
@@ -260,6 +260,21 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
   std::vector<char> on_base(nb, 0);
   for (Eigen::Index f = 0; f < Fb.rows(); ++f)
     for (int k = 0; k < 3; ++k) on_base[Fb(f, k)] = 1;
+  // With S's connectivity, vertex i of S lies over its own connected component of B and is searched for
+  // there only: a nearer part of another component (a second sheet, the far side of a UV seam) would bind
+  // it to a surface that moves otherwise, and tear the result. component[v]: the smallest vertex of v's
+  // component; face_component empty where B is one piece or has other connectivity.
+  std::vector<int> face_component, component;
+  if (Fs.rows() == Fb.rows() && ns == nb && Fs == Fb) {
+    DisjointSets pieces(nb);
+    for (Eigen::Index f = 0; f < Fb.rows(); ++f) pieces.unite(Fb(f, 0), Fb(f, 1)), pieces.unite(Fb(f, 0), Fb(f, 2));
+    face_component.resize(Fb.rows());
+    for (Eigen::Index f = 0; f < Fb.rows(); ++f) face_component[f] = pieces.find(Fb(f, 0));
+    if (std::all_of(face_component.begin(), face_component.end(), [&](int c) { return c == face_component[0]; }))
+      face_component.clear();
+    else
+      for (int v = 0; v < nb; ++v) component.push_back(pieces.find(v));
+  }
   Eigen::VectorXi face(ns);
   Eigen::MatrixX3d barycentric(ns, 3);
   Eigen::VectorXd height(ns);
@@ -270,8 +285,10 @@ void NormalDisplacements::encode(const Positions& S, const Faces& /*Fs*/, const 
       [&](long begin, long end) {
         for (long i = begin; i < end; ++i) {
           const Vec3 p = S.row(i);
+          const bool own_component = !face_component.empty() && on_base[i];  // a vertex no face uses: anywhere
           const ClosestPoint start = closest.query(
-              p, i < nb && on_base[i] ? (p - Bc.row(i)).norm() : std::numeric_limits<double>::infinity());
+              p, i < nb && on_base[i] ? (p - Bc.row(i)).norm() : std::numeric_limits<double>::infinity(),
+              own_component ? face_component.data() : nullptr, own_component ? component[i] : -1);
           int f = start.face;
           Vec3 w = start.barycentric;
           ok[i] = search.run(p, f, w, iterations[i], walks[i]);

@@ -25,7 +25,9 @@ struct NormalDisplacementOptions {
 };
 
 //! Normal-displacement detail encoding ("normal"). encode() finds, for every vertex p of S, a point b
-//! on B with p − b parallel to the Phong normal n(b): it starts at the closest point of B (Embree), runs
+//! on B with p − b parallel to the Phong normal n(b): it starts at the closest point of B (Embree; where B
+//! has S's connectivity (Fs = Fb), on p's own connected component of B, so a nearer second sheet or the
+//! far side of a UV seam does not capture it), runs
 //! Gauss–Newton on f(α, β) = (p − b(α, β)) × m(α, β) with γ = 1 − α − β and m = α n_a + β n_b + γ n_c
 //! (same roots as with the normalised n of the seed, but f is then polynomial), and walks to the
 //! neighbouring triangle across the edge whose barycentric coordinate turns negative. Vertex normals of B

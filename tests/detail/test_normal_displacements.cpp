@@ -91,6 +91,37 @@ TEST_CASE("normal displacements: bumpy plane over its flat base gives the analyt
   CHECK(rigid_error(nd, s.P, s.smooth) <= 1e-9);
 }
 
+TEST_CASE("normal displacements: each vertex stays on its own piece of the base, also where another is nearer",
+          "[detail][normal]") {
+  // The bumpy plane and, a bump's height above it, a flat second sheet (its own base): the bump tops are
+  // nearer the other sheet's base than their own (the break test's two sheets and UV seam: they were bound
+  // to it, and moved with it).
+  SceneOptions o;
+  o.resolution = 2500;
+  const Scene s = make_surface(SceneShape::Plane, o);
+  const long n = s.P.rows(), m = s.F.rows();
+  const double d = s.heights.maxCoeff();
+  REQUIRE(d > 0);
+  const Positions sheet = s.smooth.rowwise() + Eigen::RowVector3d(0, 0, d);
+  Positions S(2 * n, 3), B(2 * n, 3);
+  S << s.P, sheet;
+  B << s.smooth, sheet;
+  Faces F(2 * m, 3);
+  F << s.F, s.F.array() + static_cast<int>(n);
+  NormalDisplacements nd;
+  nd.encode(S, F, B, F);
+  CHECK(nd.report().fallback == 0);
+  CHECK((nd.base_faces().head(n).array() < m).all());   // the bumpy sheet over its own base
+  CHECK((nd.base_faces().tail(n).array() >= m).all());  // the flat one over its own
+  CHECK((nd.heights().head(n) - s.heights).cwiseAbs().maxCoeff() <= 1e-12);
+  CHECK(identity_error(nd, S, B) <= 1e-9);
+  // The second sheet lifted away: the bumpy sheet does not move.
+  Positions lifted = B, out;
+  lifted.bottomRows(n).col(2).array() += 1.0;
+  nd.reconstruct(lifted, out);
+  CHECK(test::max_row_distance(out.topRows(n), s.P) <= 1e-12);
+}
+
 TEST_CASE("normal displacements: Newton converges on the bumpy plane over a curved (smoothed) base",
           "[detail][normal]") {
   SceneOptions o;

@@ -128,8 +128,8 @@ void Deformer::end_frame(const Positions& out) {
     throw SolverError(name() + ": the frame gave vertex " + std::to_string(v) + " a non-finite position",
                       static_cast<int>(v));
   if (!frame_report_.converged)
-    frame_report_.warnings.push_back(name() + ": stopped after " + std::to_string(frame_report_.iterations) +
-                                     " iterations with relative residual " + std::to_string(frame_report_.residual) +
+    frame_report_.warnings.push_back(name() + kNotConvergedWarning + std::to_string(frame_report_.iterations) +
+                                     " iterations with relative residual " + format_number(frame_report_.residual) +
                                      "; raise the iteration limit, or loosen the tolerance where the method has one (ARAP, PriMo)");
 }
 

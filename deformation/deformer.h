@@ -193,6 +193,8 @@ class LocalFrameDeformer : public Deformer {
 //! In the prepare warning about edges joining vertices that different transforms place (fixed and a
 //! handle, or two handles, with no free vertex between them to deform).
 constexpr const char* kTornEdgesWarning = "vertices placed by different transforms";
+//! In the frame warning of a method that stopped before its tolerance (Deformer::end_frame).
+constexpr const char* kNotConvergedWarning = ": stopped after ";
 
 //! Throws InvalidInput unless every transform is finite with last row (0 0 0 1); `who` prefixes the message.
 void check_affine(const std::vector<Mat4>& transforms, const std::string& who);

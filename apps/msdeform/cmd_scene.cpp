@@ -1,4 +1,5 @@
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include "apps/msdeform/commands.h"
@@ -21,8 +22,8 @@ void add_scene_command(CLI::App& app) {
     options.resolution = parse_resolution(*resolution);
     const Scene s = make_scene(*name, options);
     write_scene(s, *dir);
-    std::printf("wrote %s/%s.{off,sel,def}: %ld vertices, %ld faces, %zu fixed, %zu free, %zu handle\n", dir->c_str(),
-                s.name.c_str(), long(s.P.rows()), long(s.F.rows()), s.region.fixed_vertices().size(),
+    std::printf("wrote %s.{off,sel,def}: %ld vertices, %ld faces, %zu fixed, %zu free, %zu handle\n",
+                (std::filesystem::path(*dir) / s.name).string().c_str(), long(s.P.rows()), long(s.F.rows()), s.region.fixed_vertices().size(),
                 s.region.free_vertices().size(), s.region.handle_vertices(0).size());
   });
 }

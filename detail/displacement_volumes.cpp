@@ -140,8 +140,13 @@ void DisplacementVolumes::bounds() {
           up = std::min(up, focal_up_[j]);
           down = std::min(down, focal_down_[j]);
         }
-      upper_[i] = std::min(up, encoded_height_[i] + trust_[i]);
-      lower_[i] = std::min(std::max(-down, encoded_height_[i] - trust_[i]), upper_[i]);
+      // The trust window around h within the focal bounds [−down, up] (which contain 0). Where the two miss
+      // each other the focal bound nearest the window wins on either side, so flipping the orientation
+      // (h, up, down → −h, down, up) mirrors the bounds (the lower one used to yield to the upper one).
+      const double h = encoded_height_[i];
+      upper_[i] = std::min(up, h + trust_[i]);
+      lower_[i] = std::max(-down, h - trust_[i]);
+      if (lower_[i] > upper_[i]) upper_[i] = lower_[i] = h - trust_[i] > up ? up : -down;
     }
   });
 }
@@ -392,8 +397,12 @@ void DisplacementVolumes::reconstruct(const Positions& B_deformed, Positions& ou
     const double rho = options_.max_volume_change;
     double cold_error = 0;
     for (long i = 0; i < ns; ++i) {
+      // Within a factor (1 + ρ) of N_i in magnitude, the sign's side mirrored (the same window for the
+      // opposite orientation, where every volume changes sign).
       const double n = cold_volume_[i], reach = std::max(std::abs(n), kVolumeFloor * volume_scale_[i]);
-      const double t = std::clamp(target_[i], n - rho / (1 + rho) * reach, n + rho * reach);
+      const double grow = rho * reach, shrink = rho / (1 + rho) * reach;
+      const double t = n < 0 ? std::clamp(target_[i], n - grow, n + shrink)
+                             : std::clamp(target_[i], n - shrink, n + grow);
       report.limited_volumes += !anchored_[i] && t != target_[i];
       frame_target_[i] = t;
       if (!anchored_[i] && volume_scale_[i] > 0)

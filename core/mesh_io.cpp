@@ -187,7 +187,8 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
   next_token(line);
   if (const std::string_view rest = next_token(line); !rest.empty())
     reader.fail("the counts line goes on after the vertex, face and edge counts with '" +
-                printable(rest.substr(0, 40)) + "'; an OFF file has one vertex or face per line, starting on "
+                printable(rest.substr(0, 40)) +
+                "'; an OFF file has one vertex or face per line, starting on "
                 "the line after the counts");
   // A vertex takes at least 6 bytes ("0 0 0\n"), a face record at least 2 (its corner count: a face with too
   // few corners is then named by the face reader, not taken for a short file); the last line may lack its
@@ -840,8 +841,10 @@ void save_mesh(const Positions& P, const Faces& F, const std::string& path, cons
                          " scalars for " + std::to_string(P.rows()) + " vertices");
     const std::string& name = options.scalar_name;  // a PLY word, and not a coordinate's name
     if (name.empty() || name == "x" || name == "y" || name == "z" ||
-        std::any_of(name.begin(), name.end(), [](char c) { return !std::isgraph(static_cast<unsigned char>(c)); }))
-      throw InvalidInput("save_mesh: " + path + ": the scalar's property name '" + printable(name.substr(0, 40)) +
+        std::any_of(name.begin(), name.end(),
+                    [](char c) { return !std::isgraph(static_cast<unsigned char>(c)); }))
+      throw InvalidInput("save_mesh: " + path + ": the scalar's property name '" +
+                         printable(name.substr(0, 40)) +
                          "' must be one word of visible characters other than x, y and z; nothing written");
   }
   const long nv = P.rows(), nf = F.rows();

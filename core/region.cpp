@@ -255,8 +255,9 @@ std::vector<int> select_box(const Positions& P, const Vec3& lo, const Vec3& hi) 
 
 std::vector<int> select_sphere(const Positions& P, const Vec3& center, double radius) {
   if (!center.allFinite() || !(radius >= 0) || !std::isfinite(radius))
-    throw InvalidInput("select_sphere: the centre must be finite and the radius finite and >= 0, got radius " +
-                       format_number(radius));
+    throw InvalidInput(
+        "select_sphere: the centre must be finite and the radius finite and >= 0, got radius " +
+        format_number(radius));
   std::vector<int> out;
   for (int i = 0; i < P.rows(); ++i)
     if ((P.row(i).transpose() - center).squaredNorm() <= radius * radius) out.push_back(i);

@@ -224,8 +224,9 @@ void MeanValueCage::coordinates(const Vec3& x, MeanValueWorkspace& ws, double* w
   for (int l = 0; l < m; ++l) total += w[l];
   // total > 0 inside the cage and < 0 outside (signed 1/distance along every ray); never 0 off the surface.
   if (!(std::abs(total) > 0) || !std::isfinite(total))
-    throw SolverError("mean value coordinates: the weights at (" + format_number(x[0]) + ", " + format_number(x[1]) +
-                      ", " + format_number(x[2]) + ") do not normalise: they underflow or overflow there (a point "
+    throw SolverError("mean value coordinates: the weights at (" + format_number(x[0]) + ", " +
+                      format_number(x[1]) + ", " + format_number(x[2]) +
+                      ") do not normalise: they underflow or overflow there (a point "
                       "very far from the cage, or on it to rounding)");
   const double inv_total = 1.0 / total;
   for (int l = 0; l < m; ++l) w[l] *= inv_total;

@@ -27,7 +27,8 @@ std::string torn_edges_warning(const Faces& F, const Region& region, const std::
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
       const int i = F(f, k), j = F(f, (k + 1) % 3);
-      if (region.code(i) != region.code(j) && region.code(i) != Region::kFree && region.code(j) != Region::kFree)
+      if (region.code(i) != region.code(j) && region.code(i) != Region::kFree &&
+          region.code(j) != Region::kFree)
         torn.emplace_back(std::min(i, j), std::max(i, j));
     }
   if (torn.empty()) return {};
@@ -37,7 +38,8 @@ std::string torn_edges_warning(const Faces& F, const Region& region, const std::
   const bool no_free = region.free_vertices().empty();
   return who + ": " + (no_free ? "the region has no free vertex, and " : "") + std::to_string(edges) +
          (edges == 1 ? " edge joins " : " edges join ") + kTornEdgesWarning + " (e.g. vertex " +
-         std::to_string(a) + ", " + role(region, a) + ", and vertex " + std::to_string(b) + ", " + role(region, b) +
+         std::to_string(a) + ", " + role(region, a) + ", and vertex " + std::to_string(b) + ", " +
+         role(region, b) +
          "): nothing deforms between them, so they stretch or tear as the handles move; leave free vertices "
          "between the fixed part and each handle";
 }
@@ -110,8 +112,9 @@ void Deformer::prepare(const Mesh& mesh, const Region& region) { prepare(positio
 
 void Deformer::begin_frame(Positions& out) {
   if (!prepared_)
-    throw UsageError(name() + (prepare_failed_ ? ": the last prepare() failed; a frame needs one that succeeded"
-                                               : ": a frame was asked for before prepare()"));
+    throw UsageError(name() + (prepare_failed_
+                                   ? ": the last prepare() failed; a frame needs one that succeeded"
+                                   : ": a frame was asked for before prepare()"));
   if (out.rows() != num_vertices_) out.resize(num_vertices_, 3);
   frame_report_.iterations = 0;
   frame_report_.residual = -1;
@@ -128,9 +131,10 @@ void Deformer::end_frame(const Positions& out) {
     throw SolverError(name() + ": the frame gave vertex " + std::to_string(v) + " a non-finite position",
                       static_cast<int>(v));
   if (!frame_report_.converged)
-    frame_report_.warnings.push_back(name() + kNotConvergedWarning + std::to_string(frame_report_.iterations) +
-                                     " iterations with relative residual " + format_number(frame_report_.residual) +
-                                     "; raise the iteration limit, or loosen the tolerance where the method has one (ARAP, PriMo)");
+    frame_report_.warnings.push_back(
+        name() + kNotConvergedWarning + std::to_string(frame_report_.iterations) +
+        " iterations with relative residual " + format_number(frame_report_.residual) +
+        "; raise the iteration limit, or loosen the tolerance where the method has one (ARAP, PriMo)");
 }
 
 void Deformer::deform(const std::vector<Mat4>& transforms, Positions& out) {
@@ -197,8 +201,9 @@ void Deformer::evaluate(const Positions& points, Positions& out) const {
   if (out.rows() != points.rows()) out.resize(points.rows(), 3);
   do_evaluate(points, out);
   if (const long i = first_non_finite_row(out); i >= 0)  // e.g. a polynomial map overflowed far away
-    throw SolverError(name() + ": the map sends point " + std::to_string(i) + " (" + format_number(points(i, 0)) +
-                      ", " + format_number(points(i, 1)) + ", " + format_number(points(i, 2)) +
+    throw SolverError(name() + ": the map sends point " + std::to_string(i) + " (" +
+                      format_number(points(i, 0)) + ", " + format_number(points(i, 1)) + ", " +
+                      format_number(points(i, 2)) +
                       ") to a non-finite position; it lies too far from the handles for this method");
 }
 

@@ -161,7 +161,7 @@ class Deformer {
  private:
   std::function<void(const std::string&)> progress_;
   bool prepared_ = false;
-  bool prepare_failed_ = false;  // the last prepare() threw (a frame's error says so)
+  bool prepare_failed_ = false;         // the last prepare() threw (a frame's error says so)
   bool output_checked_finite_ = false;  // set_output_checked_finite() in this frame
   int num_handles_ = 0, num_vertices_ = 0, num_constrained_ = 0;
 };

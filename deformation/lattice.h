@@ -48,11 +48,13 @@ class LatticeDeformer : public SpaceDeformer {
   void basis(const Vec3& x, BasisRow& row) const override;
   LeastNormOptions least_norm_options() const override { return options_.least_norm; }
   std::string missed_advice() const override {
-    return "constraints with different motions share lattice cells: use more cells (LatticeOptions::cells_longest: --lattice-cells on the command line, cells in Python), or rbf";
+    return "constraints with different motions share lattice cells: use more cells "
+           "(LatticeOptions::cells_longest: --lattice-cells on the command line, cells in Python), or rbf";
   }
   std::string overshoot_advice() const override {
-    return "constraints that conflict within one cell's support are amplified by the least-norm solve: use more "
-           "cells (cells_longest: --lattice-cells, cells in Python) so that they fall into different cells, or rbf";
+    return "constraints that conflict within one cell's support are amplified by the least-norm solve: use "
+           "more cells (cells_longest: --lattice-cells, cells in Python) so that they fall into different "
+           "cells, or rbf";
   }
 
  private:

@@ -231,7 +231,8 @@ void ClosestPointQuery::build(const Positions& P, const Faces& F) {
   impl_ = std::move(impl);
 }
 
-ClosestPoint ClosestPointQuery::query(const Vec3& p, double max_distance, const int* face_group, int group) const {
+ClosestPoint ClosestPointQuery::query(const Vec3& p, double max_distance, const int* face_group,
+                                      int group) const {
   if (!impl_) throw UsageError("ClosestPointQuery::query: called before build()");
   QueryState state{&impl_->P, &impl_->F, p, impl_->frame.scale, 0.0f, ClosestPoint{}};
   state.face_group = face_group;

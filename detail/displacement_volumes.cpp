@@ -401,8 +401,8 @@ void DisplacementVolumes::reconstruct(const Positions& B_deformed, Positions& ou
       // opposite orientation, where every volume changes sign).
       const double n = cold_volume_[i], reach = std::max(std::abs(n), kVolumeFloor * volume_scale_[i]);
       const double grow = rho * reach, shrink = rho / (1 + rho) * reach;
-      const double t = n < 0 ? std::clamp(target_[i], n - grow, n + shrink)
-                             : std::clamp(target_[i], n - shrink, n + grow);
+      const double t =
+          n < 0 ? std::clamp(target_[i], n - grow, n + shrink) : std::clamp(target_[i], n - shrink, n + grow);
       report.limited_volumes += !anchored_[i] && t != target_[i];
       frame_target_[i] = t;
       if (!anchored_[i] && volume_scale_[i] > 0)

@@ -267,10 +267,12 @@ void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Posi
   std::vector<int> face_component, component;
   if (Fs.rows() == Fb.rows() && ns == nb && Fs == Fb) {
     DisjointSets pieces(nb);
-    for (Eigen::Index f = 0; f < Fb.rows(); ++f) pieces.unite(Fb(f, 0), Fb(f, 1)), pieces.unite(Fb(f, 0), Fb(f, 2));
+    for (Eigen::Index f = 0; f < Fb.rows(); ++f)
+      pieces.unite(Fb(f, 0), Fb(f, 1)), pieces.unite(Fb(f, 0), Fb(f, 2));
     face_component.resize(Fb.rows());
     for (Eigen::Index f = 0; f < Fb.rows(); ++f) face_component[f] = pieces.find(Fb(f, 0));
-    if (std::all_of(face_component.begin(), face_component.end(), [&](int c) { return c == face_component[0]; }))
+    if (std::all_of(face_component.begin(), face_component.end(),
+                    [&](int c) { return c == face_component[0]; }))
       face_component.clear();
     else
       for (int v = 0; v < nb; ++v) component.push_back(pieces.find(v));
@@ -285,7 +287,8 @@ void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Posi
       [&](long begin, long end) {
         for (long i = begin; i < end; ++i) {
           const Vec3 p = S.row(i);
-          const bool own_component = !face_component.empty() && on_base[i];  // a vertex no face uses: anywhere
+          const bool own_component =
+              !face_component.empty() && on_base[i];  // a vertex no face uses: anywhere
           const ClosestPoint start = closest.query(
               p, i < nb && on_base[i] ? (p - Bc.row(i)).norm() : std::numeric_limits<double>::infinity(),
               own_component ? face_component.data() : nullptr, own_component ? component[i] : -1);

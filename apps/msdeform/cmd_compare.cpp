@@ -421,15 +421,18 @@ void add_compare_command(CLI::App& app) {
     // built-in scene or like another file gets a suffix (they were merged, and one's files overwritten).
     for (size_t i = 0; i < cases.size(); ++i) {
       const auto taken = [&](const std::string& name) {
-        return std::any_of(cases.begin(), cases.begin() + i, [&](const EditCase& c) { return c.name == name; });
+        return std::any_of(cases.begin(), cases.begin() + i,
+                           [&](const EditCase& c) { return c.name == name; });
       };
       if (!taken(cases[i].name)) continue;
       int k = 2;
       while (taken(cases[i].name + "-" + std::to_string(k))) ++k;
       const std::string renamed = cases[i].name + "-" + std::to_string(k);
-      const char* which = i < mesh_case ? "repeated scene" : i == mesh_case && !a->mesh.mesh.empty() ? "--mesh" : "--survey";
-      std::fprintf(stderr, "note: two edits are named %s; the %s is called %s here\n", cases[i].name.c_str(), which,
-                   renamed.c_str());
+      const char* which = i < mesh_case                             ? "repeated scene"
+                          : i == mesh_case && !a->mesh.mesh.empty() ? "--mesh"
+                                                                    : "--survey";
+      std::fprintf(stderr, "note: two edits are named %s; the %s is called %s here\n", cases[i].name.c_str(),
+                   which, renamed.c_str());
       cases[i].name = renamed;
     }
     if (!a->method.cage_file.empty() && cases.size() != 1)

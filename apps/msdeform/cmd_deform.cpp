@@ -46,15 +46,17 @@ void add_deform_command(CLI::App& app) {
   method->add_to(*cmd);
   cmd->add_option("-o,--output", *output, "Deformed mesh to write (.off .obj .ply .stl); written atomically")->required();
   auto weld = std::make_shared<double>(0);
-  CLI::Option* weld_option = cmd->add_option("--weld", *weld,
-                  "Weld vertices within EPS (mesh units; 0: identical coordinates) before deforming, so a mesh split "
-                  "along seams deforms as one surface; the output keeps the file's vertices and faces")
-      ->check(CLI::Validator(
-          [](std::string& text) {
-            const std::optional<double> x = decimal_number(text);  // -0 is 0; a word is the parser's to name
-            return x && *x < 0 ? std::string("a distance must be >= 0, got ") + text : std::string();
-          },
-          "EPS>=0"));
+  CLI::Option* weld_option =
+      cmd->add_option("--weld", *weld,
+                      "Weld vertices within EPS (mesh units; 0: identical coordinates) before deforming, so "
+                      "a mesh split along seams deforms as one surface; the output keeps the file's vertices "
+                      "and faces")
+          ->check(CLI::Validator(
+              [](std::string& text) {  // -0 is 0; a word is the parser's to name
+                const std::optional<double> x = decimal_number(text);
+                return x && *x < 0 ? std::string("a distance must be >= 0, got ") + text : std::string();
+              },
+              "EPS>=0"));
   auto quiet = std::make_shared<bool>(false);
   cmd->add_flag("-q,--quiet", *quiet, "No progress lines on stderr (warnings still print)");
   auto render_output = std::make_shared<std::string>();

@@ -103,7 +103,8 @@ void add_render_command(CLI::App& app) {
       for (Eigen::Index v = 0; v < heights.size(); ++v)
         if (!std::isfinite(heights[v]))
           throw InvalidInput("--color " + mode + ": " + c.path + ": property '" + name + "' of vertex " +
-                             std::to_string(v) + " is " + format_number(heights[v]) + "; colours need finite values");
+                             std::to_string(v) + " is " + format_number(heights[v]) +
+                             "; colours need finite values");
       o.vertex_scalar = &heights;
       o.scalar_label = name;
       std::printf("%s: values in [%.4g, %.4g]\n", name.c_str(), heights.minCoeff(), heights.maxCoeff());

@@ -23,8 +23,9 @@ void add_scene_command(CLI::App& app) {
     const Scene s = make_scene(*name, options);
     write_scene(s, *dir);
     std::printf("wrote %s.{off,sel,def}: %ld vertices, %ld faces, %zu fixed, %zu free, %zu handle\n",
-                (std::filesystem::path(*dir) / s.name).string().c_str(), long(s.P.rows()), long(s.F.rows()), s.region.fixed_vertices().size(),
-                s.region.free_vertices().size(), s.region.handle_vertices(0).size());
+                (std::filesystem::path(*dir) / s.name).string().c_str(), long(s.P.rows()), long(s.F.rows()),
+                s.region.fixed_vertices().size(), s.region.free_vertices().size(),
+                s.region.handle_vertices(0).size());
   });
 }
 

@@ -71,7 +71,8 @@ EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {
   } else {
     if (mesh.empty()) throw InvalidInput("give a mesh file with a region (--sel, or --fixed / --handle), or a built-in --scene");
     if (!need_transforms && !def.empty())  // it would be read for nothing, and the user think it used
-      throw InvalidInput("--def " + def + ": this command applies no handle transforms (deform, compare and view do)");
+      throw InvalidInput("--def " + def +
+                         ": this command applies no handle transforms (deform, compare and view do)");
     if (!sel.empty() && built_region) throw InvalidInput("give the region by --sel or by --fixed / --handle, not both");
     if (!def.empty() && built_transforms)
       throw InvalidInput("give the transforms by --def or by --translate / --rotate / --scale, not both");

@@ -58,8 +58,9 @@ int main(int argc, char** argv) {
   msd::select_blas_kernels();  // before any thread uses BLAS (core/blas_kernels.h)
   CLI::App app{"msdeform: multi-scale, detail-preserving deformation of triangle meshes"};
   app.require_subcommand(1);
-  app.footer("The performance figures (prepare, frame, memory per method at a chosen size): bench/run in the "
-             "source tree (README, Benchmarks).");
+  app.footer(
+      "The performance figures (prepare, frame, memory per method at a chosen size): bench/run in the "
+      "source tree (README, Benchmarks).");
   app.set_help_all_flag("--help-all", "Print help for all subcommands");
   app.set_version_flag("--version", [] {
     return std::string("msdeform ") + msd::version() + "\n" + msd::build_info() +
@@ -76,7 +77,8 @@ int main(int argc, char** argv) {
   // CLI11 takes "--name=" with nothing after the '=' as a missing value and reads the next argument in its
   // place: the error would then name that argument, or a flag's value would be swallowed.
   for (int i = 1; i < argc && std::string_view(argv[i]) != "--"; ++i)
-    if (const std::string_view arg = argv[i]; arg.size() > 3 && arg.substr(0, 2) == "--" && arg.back() == '=') {
+    if (const std::string_view arg = argv[i];
+        arg.size() > 3 && arg.substr(0, 2) == "--" && arg.back() == '=') {
       std::cerr << arg << ": no value after '='\nRun with --help or --help-all for more information.\n";
       return 2;
     }
@@ -89,8 +91,9 @@ int main(int argc, char** argv) {
       names += (names.empty() ? "" : ", ") + sub->get_name();
     }
     if (!known) {
-      std::cerr << "unknown subcommand '" << argv[1] << "'; the subcommands are " << names
-                << " (the benchmarks are bench/run in the source tree)\nRun with --help for more information.\n";
+      std::cerr
+          << "unknown subcommand '" << argv[1] << "'; the subcommands are " << names
+          << " (the benchmarks are bench/run in the source tree)\nRun with --help for more information.\n";
       return 2;
     }
   }

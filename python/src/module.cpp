@@ -210,9 +210,10 @@ msd::Faces to_faces(py::handle obj, const char* what, long num_vertices) {
       for (py::ssize_t j = 0; j < 3; ++j) {
         const Index v = u(i, j);
         if (v < 0 || v > INT_MAX || (num_vertices >= 0 && v >= static_cast<Index>(num_vertices)))
-          throw py::value_error(name + "[" + std::to_string(i) + ", " + std::to_string(j) + "] = " +
-                                std::to_string(v) + " is not a vertex index" +
-                                (num_vertices >= 0 ? " (there are " + std::to_string(num_vertices) + " vertices)" : ""));
+          throw py::value_error(
+              name + "[" + std::to_string(i) + ", " + std::to_string(j) + "] = " + std::to_string(v) +
+              " is not a vertex index" +
+              (num_vertices >= 0 ? " (there are " + std::to_string(num_vertices) + " vertices)" : ""));
         F(i, j) = static_cast<int>(v);
       }
     return F;

@@ -303,8 +303,9 @@ TEST_CASE("conformance: the bad-input corpus gives an error or a finite result",
   });
 }
 
-TEST_CASE("conformance: a handle touching the fixed part is warned about, and a failed prepare leaves no state",
-          "[conformance][bad-input]") {
+TEST_CASE(
+    "conformance: a handle touching the fixed part is warned about, and a failed prepare leaves no state",
+    "[conformance][bad-input]") {
   SceneOptions o;
   o.resolution = 600;
   const Scene s = make_scene("bar-bend120", o);
@@ -316,7 +317,8 @@ TEST_CASE("conformance: a handle touching the fixed part is warned about, and a 
   for_every_method([&](Deformer& d) {
     // A good edit warns about nothing of the kind.
     d.prepare(s.P, s.F, s.region);
-    for (const std::string& w : d.prepare_warnings()) CHECK_THAT(w, !Contains("placed by different transforms"));
+    for (const std::string& w : d.prepare_warnings())
+      CHECK_THAT(w, !Contains("placed by different transforms"));
     // Without free vertices (it passed without a word: the handle floated off on stretched edges), once.
     try {
       d.prepare(s.P, s.F, touching);

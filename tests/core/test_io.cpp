@@ -361,8 +361,8 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
                                                    "counts with '0'"));
   CHECK_THROWS_WITH(load_soup(write("one-line2.off", "OFF\n3 1 0 0 0 0 1 0 0 0 1 0 3 0 1 2\n")),
                     Contains("line 2") && Contains("goes on after"));
-  CHECK(load_soup(write("counts-comment.off", "OFF\n3 1 0 # counts\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")).P.rows() ==
-        3);
+  CHECK(load_soup(write("counts-comment.off", "OFF\n3 1 0 # counts\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"))
+            .P.rows() == 3);
   // A face with two corners is named, not taken for a short file (the byte count assumed 3 corners).
   CHECK_THROWS_WITH(load_mesh(write("two.off", "OFF\n4 3 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n2 1 3\n3 1 3 2\n")),
                     Contains("face 1 has 2 corners"));

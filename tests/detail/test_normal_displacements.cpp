@@ -91,8 +91,9 @@ TEST_CASE("normal displacements: bumpy plane over its flat base gives the analyt
   CHECK(rigid_error(nd, s.P, s.smooth) <= 1e-9);
 }
 
-TEST_CASE("normal displacements: each vertex stays on its own piece of the base, also where another is nearer",
-          "[detail][normal]") {
+TEST_CASE(
+    "normal displacements: each vertex stays on its own piece of the base, also where another is nearer",
+    "[detail][normal]") {
   // The bumpy plane and, a bump's height above it, a flat second sheet (its own base): the bump tops are
   // nearer the other sheet's base than their own (the break test's two sheets and UV seam: they were bound
   // to it, and moved with it).

@@ -321,6 +321,13 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
   return c;
 }
 
+bool edit_scales(const std::vector<Mat4>& transforms) {
+  return std::any_of(transforms.begin(), transforms.end(), [](const Mat4& T) {
+    const Mat3 A = T.topLeftCorner<3, 3>();
+    return !((A.transpose() * A - Mat3::Identity()).cwiseAbs().maxCoeff() <= 1e-4);
+  });
+}
+
 std::string shape_change_warning(const ShapeChange& c, bool edit_scales) {
   std::string why;
   auto add = [&](const std::string& text) { why += (why.empty() ? "" : ", ") + text; };

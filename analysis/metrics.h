@@ -207,6 +207,12 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
 //! scales a handle (edit_scales) asks for area and volume to change: then only the edges count.
 std::string shape_change_warning(const ShapeChange& change, bool edit_scales = false);
 
+//! True when a handle transform (4×4 affine, rows of `transforms`) scales or shears: its linear part A has
+//! AᵀA differing from I by more than 1e-4 in some entry. Such an edit asks for area and volume to change. A
+//! rotation written with 6 digits (the survey's .def files) has AᵀA = I to about 1e-6: not a scaling (a
+//! tolerance of 1e-9 took the survey cylinder's bend for one and silenced its −51 % volume).
+bool edit_scales(const std::vector<Mat4>& transforms);
+
 // ---------------------------------------------------------------------------------------------------
 // All metrics of one edit
 

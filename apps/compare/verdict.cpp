@@ -120,6 +120,14 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         else if (d > t.fair_distortion) fair.push_back(text);
         else good.push_back("details kept (" + fmt("%.2g", 100 * d) + " %)");
       }
+      // An edit that scales a handle asks for the volume to change; any other keeps it, up to the shape's
+      // give (ARAP loses 13 % on the survey cylinder's 120° bend).
+      if (r.volume_change && !r.edit_scales) {
+        const double v = std::abs(*r.volume_change);
+        const std::string text = "volume changed by " + fmt("%+.2g", 100 * *r.volume_change) + " %";
+        if (v > t.poor_volume) poor.push_back(text);
+        else if (v > t.fair_volume) fair.push_back(text);
+      }
       if (r.rigidity.count == 0 && r.distortion.count == 0) {
         a.verdict = Verdict::NotJudged;
         a.reason = "no rigidity or detail measure for this input" +

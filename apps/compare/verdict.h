@@ -22,6 +22,10 @@ struct VerdictThresholds {
   //! motion reads 1e-31 to 1e-22 from rounding): ratios are taken against at least this.
   double rigid_floor = 1e-6;
   double fair_distortion = 0.10, poor_distortion = 0.25;  //!< of the largest detail height
+  //! |relative volume change| of a closed mesh under an edit whose handles do not scale (edit_scales()):
+  //! beyond these, fair and poor. On the survey cylinder's 120° bend ARAP loses 13 %, the shell 51 %;
+  //! `msdeform deform` warns beyond the poor one (shape_change_warning()).
+  double fair_volume = 0.15, poor_volume = 0.30;
 };
 
 struct Assessment {
@@ -32,7 +36,7 @@ struct Assessment {
 
 //! One assessment per result (same order). Failed: the run threw (the reason is its message). Broken:
 //! self-intersecting triangle pairs or triangles folded over a multi-scale base. Poor / fair: rigidity or
-//! distortion beyond the thresholds. Good otherwise, but at most fair when the method warned (e.g. an
+//! distortion beyond the thresholds, or a closed mesh's volume changed by an edit that does not scale. Good otherwise, but at most fair when the method warned (e.g. an
 //! iterative method that did not converge; the warning is part of the reason). Not judged: neither
 //! rigidity nor detail distortion could be measured (a point cloud), never the best.
 std::vector<Assessment> assess(const std::vector<MethodResult>& results, const VerdictThresholds& t = {});

@@ -197,13 +197,7 @@ void add_deform_command(CLI::App& app) {
     }
     for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
       for (const std::string& w : *list) std::fprintf(stderr, "warning: %s\n", in_file_numbering(w).c_str());
-    // An edit that scales a handle asks for area and volume to change. A rotation written with 6 digits
-    // (the survey's .def files) is not one: its AᵀA is I to about 1e-6 (at 1e-9 it silenced the cylinder's
-    // −51 % volume).
-    const bool scales = std::any_of(c.transforms.begin(), c.transforms.end(), [](const Mat4& T) {
-      const Mat3 A = T.topLeftCorner<3, 3>();
-      return (A.transpose() * A - Mat3::Identity()).cwiseAbs().maxCoeff() > 1e-4;
-    });
+    const bool scales = edit_scales(c.transforms);  // asks for area and volume to change
     if (const std::string w = shape_change_warning(shape, scales); !w.empty())
       std::fprintf(stderr, "warning: %s%s\n", w.c_str(),
                    deformer->name() == "arap" ? "; more ARAP iterations or a larger fixed region may help"

@@ -313,6 +313,16 @@ TEST_CASE("shape change: lengths, area and volume around the free region, and wh
   CHECK(*doubled.volume_change == Approx(7));
   CHECK_THAT(shape_change_warning(doubled), Contains("area changed x4") && Contains("volume changed by +700 %"));
   CHECK(shape_change_warning(doubled, /*edit_scales=*/true).empty());  // a scaling edit asks for it
+  // Which edits scale: a rotation written with 6 digits (the survey cylinder's .def) does not.
+  Mat4 written = Mat4::Identity();
+  written.topLeftCorner<3, 3>() << -0.5, 0, -0.866025, 0, 1, 0, 0.866025, 0, -0.5;
+  CHECK_FALSE(edit_scales({Mat4::Identity(), written}));
+  CHECK_FALSE(edit_scales({}));
+  Mat4 scaled = Mat4::Identity(), sheared = Mat4::Identity();
+  scaled(1, 1) = 1.001;
+  sheared(0, 2) = 0.01;
+  CHECK(edit_scales({written, scaled}));
+  CHECK(edit_scales({sheared}));
   // One vertex pulled far out: a torn edge, named by its vertex.
   Positions torn = s.P;
   torn.row(100) *= 20;

@@ -134,6 +134,34 @@ TEST_CASE("verdicts: the summary gives the best's verdict, and says when an edit
   CHECK_THAT(verdict_summary(cloud, assess(cloud)), Contains("cloud: no result could be judged (see not-judged"));
 }
 
+TEST_CASE("verdicts: a closed mesh that lost or gained volume under rigid handles is fair or poor",
+          "[compare][verdict]") {
+  // The survey cylinder's 120° bend: the shell's result lost 51 % of the volume and its verdict named only
+  // rigidity and detail change; ARAP lost 13 %.
+  std::vector<MethodResult> results = {result("cylinder", "arap", 0.01, 0.02), result("cylinder", "shell", 0.01, 0.02),
+                                       result("cylinder", "rbf", 0.01, 0.02), result("cylinder", "laplacian", 0.01, 0.02)};
+  results[0].volume_change = -0.128;
+  results[1].volume_change = -0.5106;
+  results[2].volume_change = -0.20;
+  results[3].volume_change = 30.27;
+  const std::vector<Assessment> a = assess(results);
+  CHECK(a[0].verdict == Verdict::Good);
+  CHECK_THAT(a[0].reason, !Contains("volume"));
+  CHECK(a[1].verdict == Verdict::Poor);
+  CHECK_THAT(a[1].reason, Contains("volume changed by -51 %"));
+  CHECK(a[2].verdict == Verdict::Fair);
+  CHECK_THAT(a[2].reason, Contains("volume changed by -20 %"));
+  CHECK(a[3].verdict == Verdict::Poor);
+  CHECK_THAT(a[3].reason, Contains("volume changed by +3e+03 %"));
+  CHECK(a[0].best);
+  // An edit that scales a handle asks for the volume to change.
+  for (MethodResult& r : results) r.edit_scales = true;
+  for (const Assessment& b : assess(results)) {
+    CHECK(b.verdict == Verdict::Good);
+    CHECK_THAT(b.reason, !Contains("volume"));
+  }
+}
+
 TEST_CASE("verdicts: rigidity errors at rounding level are rigid, not hundreds of times the best",
           "[compare][verdict]") {
   // homer turned rigidly as a whole: shell 1.9e-31, gradient 1e-28, RBF 1.5e-22 were called poor (542×,

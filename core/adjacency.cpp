@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "msdeform/core/disjoint_sets.h"
+
 namespace msd {
 
 VertexAdjacency vertex_adjacency(const Faces& F, int num_vertices) {
@@ -83,6 +85,19 @@ std::vector<int> grow_rings(const Faces& F, int num_vertices, std::vector<int> s
 std::vector<int> boundary_band(const Faces& F, int num_vertices, int rings) {
   if (rings <= 0) return {};
   return grow_rings(F, num_vertices, boundary_vertices(F, num_vertices), rings - 1);
+}
+
+std::vector<int> vertex_components(const Faces& F, int num_vertices) {
+  DisjointSets pieces(num_vertices);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) pieces.unite(F(f, 0), F(f, 1)), pieces.unite(F(f, 0), F(f, 2));
+  std::vector<int> of_root(num_vertices, -1), component(num_vertices, -1);
+  int count = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    int& id = of_root[pieces.find(F(f, 0))];
+    if (id < 0) id = count++;
+  }
+  for (int v = 0; v < num_vertices; ++v) component[v] = of_root[pieces.find(v)];
+  return component;
 }
 
 }  // namespace msd

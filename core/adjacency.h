@@ -33,4 +33,9 @@ std::vector<int> grow_rings(const Faces& F, int num_vertices, std::vector<int> s
 //! plus their neighbours for 2, and so on; empty for rings <= 0.
 std::vector<int> boundary_band(const Faces& F, int num_vertices, int rings);
 
+//! Connected components through shared vertices: the component of each of the num_vertices vertices,
+//! numbered 0, 1, … in the order of their first face in F; −1 for a vertex no face uses. The number of
+//! components is the largest entry + 1.
+std::vector<int> vertex_components(const Faces& F, int num_vertices);
+
 }  // namespace msd

@@ -4,6 +4,7 @@
 #include <array>
 #include <numeric>
 
+#include "msdeform/core/adjacency.h"
 #include "msdeform/core/disjoint_sets.h"
 #include "msdeform/core/errors.h"
 
@@ -139,11 +140,8 @@ SurfaceCheck check_surface(const Positions& P, Faces& F) {
   // Fans per vertex, components through shared vertices, unreferenced vertices.
   std::vector<int> fan_count(nv, 0);
   std::vector<char> referenced(nv, 0);
-  DisjointSets pieces(nv);
   for (int f = 0; f < nf; ++f) {
     for (int k = 0; k < 3; ++k) referenced[F(f, k)] = 1;
-    pieces.unite(F(f, 0), F(f, 1));
-    pieces.unite(F(f, 0), F(f, 2));
     if (excluded[f]) continue;
     for (int k = 0; k < 3; ++k)
       if (fans.find(3 * f + k) == 3 * f + k) ++fan_count[F(f, k)];
@@ -152,13 +150,8 @@ SurfaceCheck check_surface(const Positions& P, Faces& F) {
     r.unreferenced_vertices += !referenced[v];
     if (fan_count[v] > 1) r.nonmanifold_vertices.push_back(v);
   }
-  std::vector<int> component_of_root(nv, -1);
-  auto component = [&](int f) {
-    int& id = component_of_root[pieces.find(F(f, 0))];
-    if (id < 0) id = r.components++;
-    return id;
-  };
-  for (int f = 0; f < nf; ++f) component(f);  // numbers the components in the order of their first face
+  const std::vector<int> component = vertex_components(F, nv);  // in the order of their first face
+  for (int c : component) r.components = std::max(r.components, c + 1);
 
   // Orientation: a breadth-first search per patch of faces joined across manifold edges. Across such an
   // edge the two half-edges must run opposite ways; side[f] = -1 marks a face to turn over.
@@ -186,7 +179,7 @@ SurfaceCheck check_surface(const Positions& P, Faces& F) {
     }
     if (!orientable) {
       r.nonorientable_faces.push_back(root);
-      r.nonorientable_components.push_back(component(root));
+      r.nonorientable_components.push_back(component[F(root, 0)]);
       continue;
     }
     const long against = std::count_if(patch.begin(), patch.end(), [&](int f) { return side[f] < 0; });

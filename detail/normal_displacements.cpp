@@ -7,7 +7,7 @@
 #include <limits>
 #include <string>
 
-#include "msdeform/core/disjoint_sets.h"
+#include "msdeform/core/adjacency.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/core/vector_kernels.h"
@@ -262,20 +262,15 @@ void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Posi
     for (int k = 0; k < 3; ++k) on_base[Fb(f, k)] = 1;
   // With S's connectivity, vertex i of S lies over its own connected component of B and is searched for
   // there only: a nearer part of another component (a second sheet, the far side of a UV seam) would bind
-  // it to a surface that moves otherwise, and tear the result. component[v]: the smallest vertex of v's
-  // component; face_component empty where B is one piece or has other connectivity.
+  // it to a surface that moves otherwise, and tear the result. face_component stays empty where B is one
+  // piece or has other connectivity.
   std::vector<int> face_component, component;
   if (Fs.rows() == Fb.rows() && ns == nb && Fs == Fb) {
-    DisjointSets pieces(nb);
-    for (Eigen::Index f = 0; f < Fb.rows(); ++f)
-      pieces.unite(Fb(f, 0), Fb(f, 1)), pieces.unite(Fb(f, 0), Fb(f, 2));
-    face_component.resize(Fb.rows());
-    for (Eigen::Index f = 0; f < Fb.rows(); ++f) face_component[f] = pieces.find(Fb(f, 0));
-    if (std::all_of(face_component.begin(), face_component.end(),
-                    [&](int c) { return c == face_component[0]; }))
-      face_component.clear();
-    else
-      for (int v = 0; v < nb; ++v) component.push_back(pieces.find(v));
+    component = vertex_components(Fb, nb);
+    if (*std::max_element(component.begin(), component.end()) > 0) {
+      face_component.resize(Fb.rows());
+      for (Eigen::Index f = 0; f < Fb.rows(); ++f) face_component[f] = component[Fb(f, 0)];
+    }
   }
   Eigen::VectorXi face(ns);
   Eigen::MatrixX3d barycentric(ns, 3);

@@ -164,6 +164,33 @@ TEST_CASE("boundary_vertices are the ends of edges used by exactly one face, on 
   CHECK(boundary_vertices(plane.F, static_cast<int>(plane.P.rows())).size() == 4 * (side - 1));
 }
 
+TEST_CASE("vertex_components numbers the pieces in the order of their first face, -1 for unused vertices",
+          "[core][mesh]") {
+  // Against a breadth-first search over the face edges, on random face lists (repeated and degenerate
+  // faces, unused vertices).
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 500; ++trial) {
+    const int nv = 1 + static_cast<int>(rng() % 30), nf = static_cast<int>(rng() % 20);
+    Faces F(nf, 3);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) F(f, k) = static_cast<int>(rng() % nv);
+    const VertexAdjacency adjacency = vertex_adjacency(F, nv);
+    std::vector<int> want(nv, -1);
+    int count = 0;
+    for (int f = 0; f < nf; ++f) {
+      if (want[F(f, 0)] >= 0) continue;
+      std::vector<int> queue = {F(f, 0)};
+      want[F(f, 0)] = count;
+      for (size_t i = 0; i < queue.size(); ++i)
+        for (const int* n = adjacency.begin(queue[i]); n != adjacency.end(queue[i]); ++n)
+          if (want[*n] < 0) want[*n] = count, queue.push_back(*n);
+      ++count;
+    }
+    INFO("trial " << trial);
+    CHECK(vertex_components(F, nv) == want);
+  }
+}
+
 TEST_CASE("extent_outlier_warning: a few strays far in edge lengths, not a coarse cone's apex", "[core][mesh]") {
   Positions P;
   Faces F;

@@ -302,7 +302,7 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
     // which weights the share alike for every edge and leaves the largest factor unchanged.
     for (int k = 0; k < 3; ++k) {
       const int i = F(f, k), j = F(f, (k + 1) % 3);
-      if (region.code(i) == region.code(j) && region.code(i) != Region::kFree) continue;  // placed together
+      if (region.placed_together(i, j)) continue;
       const double l = (rest.row(i) - rest.row(j)).norm(), l1 = (deformed.row(i) - deformed.row(j)).norm();
       if (!(l > 0)) continue;
       const double factor = l1 > 0 ? std::max(l1 / l, l / l1) : INFINITY;

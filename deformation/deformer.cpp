@@ -27,9 +27,7 @@ std::string torn_edges_warning(const Faces& F, const Region& region, const std::
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
       const int i = F(f, k), j = F(f, (k + 1) % 3);
-      if (region.code(i) != region.code(j) && region.code(i) != Region::kFree &&
-          region.code(j) != Region::kFree)
-        torn.emplace_back(std::min(i, j), std::max(i, j));
+      if (region.placed_apart(i, j)) torn.emplace_back(std::min(i, j), std::max(i, j));
     }
   if (torn.empty()) return {};
   std::sort(torn.begin(), torn.end());

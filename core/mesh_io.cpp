@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <numeric>
 #include <sstream>
 #include <string_view>
 #include <unordered_map>
@@ -685,8 +686,72 @@ FileContents read_contents(const std::string& path, const std::string& who) {
   return read_stl(text, path, who);
 }
 
-// The file's vertices as they are; its polygons as triangles (fans from their first corner), without
-// faces that repeat a vertex index or the vertex set of an earlier triangle.
+// Splits polygon corner[0 .. n) (n > 3) of `points` into n − 2 triangles that turn the polygon's way (their
+// normals along its Newell normal): a fan from the first corner where that fan does (convex polygons, most
+// non-planar quads: the fan keeps the file's faces as every mesh tool reads them), else ear clipping in the
+// plane of the Newell normal (a concave polygon, whose fan has a triangle turned over that overlaps the
+// others). A polygon whose corners lie on a line keeps its fan (its triangles are degenerate, which
+// check_surface reports).
+enum class PolygonSplit { Fan, EarClipped, CrossesItself };
+PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, int n, std::vector<std::array<int, 3>>& out) {
+  Vec3 normal = Vec3::Zero();  // Newell: twice the vector area, whatever the first corner
+  for (int k = 0; k < n; ++k) normal += points[corner[k]].cross(points[corner[(k + 1) % n]]);
+  const Vec3& p0 = points[corner[0]];
+  bool fan = true;
+  for (int k = 1; k + 1 < n && fan; ++k)
+    fan = (points[corner[k]] - p0).cross(points[corner[k + 1]] - p0).dot(normal) > 0;
+  if (!(normal.squaredNorm() > 0)) {  // no area: all corners on a line, or lobes that cancel (a bow tie)
+    for (int k = 1; k + 1 < n; ++k)
+      if ((points[corner[k]] - p0).cross(points[corner[k + 1]] - p0).squaredNorm() > 0)
+        return PolygonSplit::CrossesItself;
+    fan = true;
+  }
+  if (fan) {
+    for (int k = 1; k + 1 < n; ++k) out.push_back({corner[0], corner[k], corner[k + 1]});
+    return PolygonSplit::Fan;
+  }
+  // Ear clipping in the plane (u, v) with u × v along the normal, so the polygon runs counter-clockwise.
+  const Vec3 u = normal.unitOrthogonal(), v = normal.normalized().cross(u);
+  std::vector<Eigen::Vector2d> q(n);
+  for (int k = 0; k < n; ++k) q[k] = {points[corner[k]].dot(u), points[corner[k]].dot(v)};
+  const auto turn = [&](int a, int b, int c) {  // > 0: a, b, c counter-clockwise
+    const Eigen::Vector2d e = q[b] - q[a], f = q[c] - q[a];
+    return e.x() * f.y() - e.y() * f.x();
+  };
+  std::vector<int> left(n);
+  std::iota(left.begin(), left.end(), 0);
+  const size_t first = out.size();
+  while (left.size() > 3) {
+    const int m = static_cast<int>(left.size());
+    bool clipped = false;
+    for (int i = 0; i < m && !clipped; ++i) {
+      const int a = left[(i + m - 1) % m], b = left[i], c = left[(i + 1) % m];
+      if (!(turn(a, b, c) > 0)) continue;  // a reflex or straight corner is no ear
+      bool empty = true;  // no other corner inside or on the ear
+      for (int j : left)
+        if (j != a && j != b && j != c && q[j] != q[a] && q[j] != q[b] && q[j] != q[c] && turn(a, b, j) >= 0 &&
+            turn(b, c, j) >= 0 && turn(c, a, j) >= 0)
+          empty = false;
+      if (!empty) continue;
+      out.push_back({corner[a], corner[b], corner[c]});
+      left.erase(left.begin() + i);
+      clipped = true;
+    }
+    if (!clipped) {
+      out.resize(first);
+      return PolygonSplit::CrossesItself;
+    }
+  }
+  if (!(turn(left[0], left[1], left[2]) > 0)) {
+    out.resize(first);
+    return PolygonSplit::CrossesItself;
+  }
+  out.push_back({corner[left[0]], corner[left[1]], corner[left[2]]});
+  return PolygonSplit::EarClipped;
+}
+
+// The file's vertices as they are; its polygons as triangles (split_polygon), without faces that repeat a
+// vertex index or the vertex set of an earlier triangle.
 TriangleSoup triangulate(const FileContents& soup, const std::string& path, const std::string& who,
                          LoadReport& report) {
   const int nv = static_cast<int>(soup.points.size());
@@ -716,8 +781,18 @@ TriangleSoup triangulate(const FileContents& soup, const std::string& path, cons
       ++report.degenerate_faces_skipped;
       continue;
     }
-    if (n > 3) ++report.polygons_triangulated;
-    for (int k = 1; k + 1 < n; ++k) triangles.push_back({corner[0], corner[k], corner[k + 1]});
+    if (n == 3) {
+      triangles.push_back({corner[0], corner[1], corner[2]});
+      continue;
+    }
+    ++report.polygons_triangulated;
+    const PolygonSplit split = split_polygon(soup.points, corner, n, triangles);
+    if (split == PolygonSplit::CrossesItself)
+      throw InvalidInput(who + ": " + path + (soup.lines[f] > 0 ? " line " + std::to_string(soup.lines[f]) : "") +
+                         ": face " + std::to_string(f) + " is a polygon of " + std::to_string(n) +
+                         " corners that crosses itself (in the plane of its normal): no split into triangles "
+                         "keeps it as drawn; split it into triangles or simple polygons in the modeller");
+    report.concave_polygons += split == PolygonSplit::EarClipped;
   }
   // Duplicates: sort the vertex sets, keep the first triangle of each.
   std::vector<std::array<int, 4>> keys(triangles.size());

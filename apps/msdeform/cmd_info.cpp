@@ -27,7 +27,10 @@ void print_info(const std::string& what, const MeshInfo& i, const LoadReport* re
   std::printf("  flipped faces         %d (wound against their neighbours; turned over when loaded)\n",
               i.flipped_faces);
   if (report) {
-    std::printf("  polygons triangulated %d\n", report->polygons_triangulated);
+    std::printf("  polygons triangulated %d", report->polygons_triangulated);
+    if (report->concave_polygons > 0)
+      std::printf(" (%d concave: split by ear clipping, not into fans)", report->concave_polygons);
+    std::printf("\n");
     std::printf("  repeated-index faces  %d (dropped)\n", report->degenerate_faces_skipped);
     std::printf("  duplicate faces       %d (dropped)\n", report->duplicate_faces_dropped);
     if (report->first_attribute_line > 0)

@@ -119,6 +119,56 @@ TEST_CASE("polygons are triangulated, duplicate and repeated-index faces dropped
   CHECK(mesh_report.duplicate_faces_dropped == 2);
 }
 
+TEST_CASE("a concave polygon is split into triangles that cover it once, a convex one into its fan",
+          "[core][io]") {
+  // Break test: the pentagon below (its reflex corner is the 4th) became a fan from its first corner with
+  // one triangle turned over and overlapping the others, and `info` called the mesh manifold and oriented.
+  test::TempDir tmp;
+  const auto check_cover = [](const TriangleSoup& soup, double area) {
+    double total = 0;
+    for (Eigen::Index f = 0; f < soup.F.rows(); ++f) {
+      const Vec3 p0 = soup.P.row(soup.F(f, 0)), p1 = soup.P.row(soup.F(f, 1)), p2 = soup.P.row(soup.F(f, 2));
+      const double z = (p1 - p0).cross(p2 - p0).z() / 2;
+      INFO("triangle " << f);
+      CHECK(z > 0);  // every triangle turns the polygon's way (it runs counter-clockwise about +z)
+      total += z;
+    }
+    CHECK(total == Approx(area).epsilon(1e-12));  // so they cover it once
+  };
+  std::ofstream(tmp.file("concave.obj")) << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 1 0.5 0\nv 0 2 0\nf 2 3 4 5 1\n";
+  LoadReport report;
+  const TriangleSoup concave = load_soup(tmp.file("concave.obj"), &report);
+  REQUIRE(concave.F.rows() == 3);
+  check_cover(concave, 2.5);  // the square of side 2 less the notch (area 1.5)
+  CHECK(report.polygons_triangulated == 1);
+  CHECK(report.concave_polygons == 1);
+  // Every start: the reflex corner first, last, in the middle; and an L of eight corners (area 3).
+  for (int shift = 0; shift < 5; ++shift) {
+    std::string face = "f";
+    for (int k = 0; k < 5; ++k) face += " " + std::to_string((shift + k) % 5 + 1);
+    std::ofstream(tmp.file("turned.obj")) << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 1 0.5 0\nv 0 2 0\n" << face << "\n";
+    INFO(face);
+    check_cover(load_soup(tmp.file("turned.obj")), 2.5);
+  }
+  std::ofstream(tmp.file("l.off")) << "OFF\n8 1 0\n0 0 0\n1 0 0\n2 0 0\n2 1 0\n1 1 0\n1 2 0\n0 2 0\n0 1 0\n"
+                                      "8 3 4 5 6 7 0 1 2\n";
+  check_cover(load_soup(tmp.file("l.off")), 3);
+  // A convex polygon keeps the fan from its first corner (the faces every mesh tool reads).
+  std::ofstream(tmp.file("hexagon.off")) << "OFF\n6 1 0\n2 0 0\n1 1.7 0\n-1 1.7 0\n-2 0 0\n-1 -1.7 0\n1 -1.7 0\n"
+                                            "6 0 1 2 3 4 5\n";
+  LoadReport convex;
+  const TriangleSoup hexagon = load_soup(tmp.file("hexagon.off"), &convex);
+  REQUIRE(hexagon.F.rows() == 4);
+  for (int k = 0; k < 4; ++k) CHECK(hexagon.F.row(k) == Eigen::RowVector3i(0, k + 1, k + 2));
+  CHECK(convex.concave_polygons == 0);
+  // A polygon that crosses itself (a bow tie) has no such split: refused, with its line and face.
+  for (const char* bowtie : {"0 0 0\n2 2 0\n2 0 0\n0 1 0\n", "0 0 0\n1 1 0\n1 0 0\n0 1 0\n"}) {  // lobes unequal, equal
+    std::ofstream(tmp.file("bowtie.off")) << "OFF\n4 1 0\n" << bowtie << "4 0 1 2 3\n";
+    CHECK_THROWS_WITH(load_soup(tmp.file("bowtie.off")),
+                      Contains("bowtie.off line 7: face 0 is a polygon of 4 corners that crosses itself"));
+  }
+}
+
 TEST_CASE("two triangles wound against each other keep the file's 4 vertices, one face turned over",
           "[core][io]") {
   // The issue's example. The loader once detached the second face with private vertex copies.

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 
 #include "msdeform/core/errors.h"
 
@@ -180,6 +182,46 @@ Mat4 Gizmo::drag(const OrbitCamera& camera, GizmoMode mode, GizmoPart part, cons
   T.topLeftCorner<3, 3>() = R;
   T.topRightCorner<3, 1>() = center - R * center;
   return T;
+}
+
+namespace {
+// The rotation of A's polar decomposition (of a reflection: with one axis flipped).
+Mat3 polar_rotation(const Mat3& A) {
+  const Eigen::JacobiSVD<Mat3> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3 U = svd.matrixU();
+  if ((U * svd.matrixV().transpose()).determinant() < 0) U.col(2) *= -1;
+  return U * svd.matrixV().transpose();
+}
+}  // namespace
+
+double turn_degrees(const Mat4& T) {
+  const Mat3 R = polar_rotation(T.topLeftCorner<3, 3>());
+  return std::acos(std::clamp((R.trace() - 1) / 2, -1.0, 1.0)) / kDegree;
+}
+
+bool turn_stays_below_half(const Mat4& from, const Mat4& to) {
+  // The shortest turn from one to the other is by θ about an axis; along it the handle's turn from rest
+  // moves by at most θ/m per m-th, so checking m + 1 samples with that margin bounds it all the way
+  // (conservative within 1° of 180°).
+  const Mat3 start = polar_rotation(from.topLeftCorner<3, 3>());
+  const Eigen::AngleAxisd turn(polar_rotation(to.topLeftCorner<3, 3>()) * start.transpose());
+  const double theta = std::abs(turn.angle()) / kDegree;
+  const int m = std::max(1, static_cast<int>(std::ceil(theta)));
+  for (int i = 0; i <= m; ++i) {
+    Mat4 at = Mat4::Identity();
+    at.topLeftCorner<3, 3>() = Eigen::AngleAxisd(turn.angle() * i / m, turn.axis()).toRotationMatrix() * start;
+    if (!(turn_degrees(at) + theta / m < 180)) return false;
+  }
+  return true;
+}
+
+std::string half_turn_message(int handle, const Mat4& start) {
+  char text[400];
+  std::snprintf(text, sizeof text, "handle %d stops at %.0f degrees from rest: half a turn is as far as a handle "
+                "turns (its transform is a matrix, which keeps a rotation only up to whole turns, so a .def saved past "
+                "it would give the shape turned the other way round); turn it back, or reset", handle,
+                turn_degrees(start));
+  return text;
 }
 
 // ---------------------------------------------------------------------------------------------------

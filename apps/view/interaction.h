@@ -81,6 +81,20 @@ struct Gizmo {
   Mat4 drag(const OrbitCamera& camera, GizmoMode mode, GizmoPart part, const Vec2& from, const Vec2& to) const;
 };
 
+// The angle in degrees, in [0, 180], of the rotation in T's linear part (the rotation of its polar
+// decomposition: scale and shear left out; a reflection's rotation part after flipping one axis).
+double turn_degrees(const Mat4& T);
+
+// Whether a handle turned by `from` stays below half a turn from rest all along the shortest turn to
+// `to` (rotations of their polar decompositions; checked every degree, with a degree's margin). A transform
+// keeps a rotation only up to whole turns (200° is the −160° transform), so a handle turned half a turn or
+// more would not come back from the .def that save-def writes (a method that blends rotations, or iterates
+// from the shown shape, turns it the other way round): `deform --rotate` refuses such turns too.
+bool turn_stays_below_half(const Mat4& from, const Mat4& to);
+
+// Why a turn was stopped (the viewer's message; `handle` its index).
+std::string half_turn_message(int handle, const Mat4& start);
+
 // The window depth buffer of the 3D view, row 0 at the top (as screen coordinates), for visibility tests.
 struct DepthImage {
   int width = 0, height = 0;

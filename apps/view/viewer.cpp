@@ -585,7 +585,14 @@ void Viewer::pointer_move(const Vec2& p) {
     camera_.orbit(d.x(), d.y());
   } else if (drag_part_ != GizmoPart::None) {
     const GizmoMode mode = gizmo_mode();
-    transforms_[active_handle_] = drag_gizmo_.drag(camera_, mode, drag_part_, drag_from_, p) * drag_start_transform_;
+    const Mat4 next = drag_gizmo_.drag(camera_, mode, drag_part_, drag_from_, p) * drag_start_transform_;
+    // From where the handle is to where the cursor puts it: the turn must not pass half a turn on the way.
+    const Mat4& now = transforms_[active_handle_];
+    if (mode == GizmoMode::Rotate && !turn_stays_below_half(now, next)) {
+      error_ = half_turn_message(active_handle_, now);  // the handle stays where it is
+      return;
+    }
+    transforms_[active_handle_] = next;
     needs_frame_ = true;
   } else if (tool_ == Tool::Brush) {
     paint_role(brush_select(stroke_screen_, p, brush_radius_, stroke_depth_));
@@ -926,6 +933,8 @@ void Viewer::run_command_step(const ScriptCommand& c, int step, bool& done) {
       const Eigen::Matrix3d R = Eigen::AngleAxisd(number(3) * 3.14159265358979323846 / 180 / steps, axis.normalized()).toRotationMatrix();
       T.topLeftCorner<3, 3>() = R;
       T.topRightCorner<3, 1>() = c0 - R * c0;
+      if (!turn_stays_below_half(transforms_[active_handle_], T * transforms_[active_handle_]))
+        throw InvalidInput(half_turn_message(active_handle_, transforms_[active_handle_]));
     }
     transforms_[active_handle_] = T * transforms_[active_handle_];
     needs_frame_ = true;

@@ -197,6 +197,11 @@ expect_error 1 "--tolerance 0 asks for a fixed number of iterations" "${run_view
 expect_error 1 "ks" "${run_view[@]}" lift.off --sel lift.sel --method shell --ks -1
 awk 'NR <= 2 { print; next } { print ($0 == "2" ? "5" : $0) }' lift.sel >gap.sel
 expect_error 1 "consecutive" "${run_view[@]}" lift.off --sel gap.sel
+# Two turns of 100° would pass half a turn (shown as 200°, saved as the -160° matrix): the second stops it.
+printf 'rotate 1 0 0 100 10\nrotate 1 0 0 100 10\nsave-def never.def\n' >bad.txt
+expect_error 1 "bad.txt:2: rotate: handle 0 stops at 170 degrees from rest: half a turn is as far as a handle turns" \
+  "${run_view[@]}" lift.off --sel lift.sel --script bad.txt
+[ ! -e never.def ] || fail "a script stopped at half a turn still saved its .def"
 printf 'translate 0 0 1\nwiggle 3\n' >bad.txt
 expect_error 1 "bad.txt:2: unknown command 'wiggle'" "${run_view[@]}" lift.off --script bad.txt
 printf 'translate 0 zero 1\n' >bad.txt

@@ -108,6 +108,34 @@ TEST_CASE("gizmo: arrows, centre and ring picked under the cursor, drags transla
   CHECK(g.drag(camera, GizmoMode::Rotate, GizmoPart::None, c, c + Vec2(9, 9)).isIdentity(0));
 }
 
+TEST_CASE("half a turn is as far as a handle turns: beyond it the .def it saves would turn the other way",
+          "[view]") {
+  // Break test: two scripted turns of 100° about x gave a 200° twist on screen, saved as the −160° matrix,
+  // which `deform` turned the other way (0.108 of the diagonal apart).
+  const auto about = [](double degrees, const Vec3& axis) {
+    Mat4 T = Mat4::Identity();
+    T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(degrees * 3.14159265358979323846 / 180, axis.normalized()).toRotationMatrix();
+    return T;
+  };
+  const Vec3 x = Vec3::UnitX(), tilted(1, 2, 0.5);
+  CHECK(turn_degrees(Mat4::Identity()) == Approx(0).margin(1e-12));
+  CHECK(turn_degrees(about(100, tilted)) == Approx(100).epsilon(1e-12));
+  CHECK(turn_degrees(about(200, x)) == Approx(160).epsilon(1e-12));  // the matrix keeps −160°
+  Mat4 scaled = about(30, x);
+  scaled.topLeftCorner<3, 3>() *= 2.5;  // scale is left out
+  CHECK(turn_degrees(scaled) == Approx(30).epsilon(1e-12));
+  CHECK(turn_stays_below_half(Mat4::Identity(), about(100, x)));
+  CHECK(turn_stays_below_half(about(100, x), about(178, x)));
+  CHECK_FALSE(turn_stays_below_half(about(100, x), about(200, x)));   // through the half turn
+  CHECK_FALSE(turn_stays_below_half(about(170, x), about(-170, x)));  // 20° apart, but through 180°
+  CHECK(turn_stays_below_half(about(170, x), about(90, x)));          // back the way it came
+  CHECK(turn_stays_below_half(about(170, x), about(-5, x)));  // the shorter way, -175°, through rest
+  // About another axis: from 150° about x, 60° about z goes no further than 150° + 60° allows, which is
+  // checked along the way rather than at the end.
+  CHECK(turn_stays_below_half(about(150, x), about(20, Vec3::UnitZ()) * about(150, x)));
+  CHECK(half_turn_message(2, about(175, x)).find("handle 2 stops at 175 degrees from rest") != std::string::npos);
+}
+
 TEST_CASE("selection: brush and lasso take the vertices on screen that the depth test shows", "[view]") {
   DepthImage depth;
   depth.width = 100;

@@ -79,6 +79,26 @@ TEST_CASE("shell: identity transforms return the input exactly", "[deformation][
   }
 }
 
+TEST_CASE("shell: a solver failure caused by a stray vertex far away names the stray vertex too",
+          "[deformation][shell]") {
+  // Break test: one free vertex at z = 1e15 on a grid: "the system is singular near vertex 60 (a degenerate
+  // neighbourhood, ...)", and the warning about the outlier that explains it was never seen.
+  Scene s = small_scene("lift");
+  int stray = -1;
+  for (int v = 0; v < s.P.rows() && stray < 0; ++v)
+    if (s.region.is_free(v)) stray = v;
+  REQUIRE(stray >= 0);
+  s.P(stray, 2) = 1e15;
+  ShellDeformer shell;
+  try {
+    shell.prepare(s.P, s.F, s.region);
+    FAIL("prepare did not fail");
+  } catch (const SolverError& e) {
+    CHECK_THAT(e.what(), Contains("singular") && Contains(". Note: shell: a few outlying vertices set the bounding box") &&
+                             Contains("vertex " + std::to_string(stray) + " lies 1e+15 outside that box"));
+  }
+}
+
 TEST_CASE("shell: only the ratio of the stiffnesses matters, down to subnormal and up to huge values",
           "[deformation][shell]") {
   // (0, 4.9e-324) and (0, 1.7e308) are pure bending like (0, 1): they used to make the system singular or

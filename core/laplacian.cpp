@@ -183,14 +183,27 @@ Eigen::VectorXd face_areas(const Positions& P, const Faces& F) {
   return A;
 }
 
+namespace {
+// The area of triangle f, a sliver's too (face_areas() counts one below 1e-14 of its squared longest edge
+// as degenerate: a handle translated by 1e69 stretched every free triangle into one, and the area ratio
+// read 0), from edges scaled to a largest component of 1 (no overflow of the squares at any finite size).
+double exact_area(const Positions& P, const Faces& F, Eigen::Index f) {
+  const Vec3 p0 = P.row(F(f, 0));
+  const Vec3 e1 = P.row(F(f, 1)).transpose() - p0, e2 = P.row(F(f, 2)).transpose() - p0;
+  const double scale = std::max(e1.cwiseAbs().maxCoeff(), e2.cwiseAbs().maxCoeff());
+  if (!(scale > 0)) return 0;
+  return 0.5 * (e1 / scale).cross(e2 / scale).norm() * scale * scale;
+}
+}  // namespace
+
 double free_area_ratio(const Positions& rest, const Positions& deformed, const Faces& F, const Region& region) {
-  double before = 0, after = 0;
-  const Eigen::VectorXd a = face_areas(rest, F), b = face_areas(deformed, F);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    if (region.code(F(f, 0)) == Region::kFree || region.code(F(f, 1)) == Region::kFree ||
-        region.code(F(f, 2)) == Region::kFree)
-      before += a[f], after += b[f];
-  return before > 0 ? after / before : a.sum() > 0 ? b.sum() / a.sum() : 1.0;
+  double before = 0, after = 0, all_before = 0, all_after = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const double a = exact_area(rest, F, f), b = exact_area(deformed, F, f);
+    all_before += a, all_after += b;
+    if (region.is_free(F(f, 0)) || region.is_free(F(f, 1)) || region.is_free(F(f, 2))) before += a, after += b;
+  }
+  return before > 0 ? after / before : all_before > 0 ? all_after / all_before : 1.0;
 }
 
 SparseMatrix gradient_operator(const Positions& P, const Faces& F) {

@@ -342,4 +342,11 @@ TEST_CASE("shape change: lengths, area and volume around the free region, and wh
   CHECK(handle_torn.largest_factor > 5);
   CHECK(handle_torn.largest_vertex == 100);
   CHECK_THROWS_AS(shape_change(s.P, torn.topRows(10), s.F, region), InvalidInput);
+  // Vertex 100 moved 1e69 away: its triangles become slivers whose area still counts (it read "area x0").
+  Positions far = s.P;
+  far(100, 2) += 1e69;
+  const ShapeChange slivers = shape_change(s.P, far, s.F, region);
+  CHECK(slivers.area_ratio > 1e60);
+  CHECK(std::isfinite(slivers.area_ratio));
+  CHECK_THAT(shape_change_warning(slivers), Contains("area changed x"));
 }

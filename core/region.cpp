@@ -115,10 +115,12 @@ namespace {
 
 // Whitespace-separated numbers of a text file with '#' comments, each with its line number. More than
 // at_most numbers (what the file should hold: expected) is an error at the first one too many, so a huge
-// file costs no more than a right one.
+// file costs no more than a right one. one_per_line: a second number on a line is an error there (the
+// count would otherwise blame the file's last line).
 template <class T>
 std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char* who, const char* what,
-                                            size_t at_most = SIZE_MAX, const std::string& expected = "") {
+                                            size_t at_most = SIZE_MAX, const std::string& expected = "",
+                                            bool one_per_line = false) {
   const FileText file(path, who);
   const std::string_view text = file.text();
   std::vector<std::pair<T, int>> out;
@@ -143,6 +145,9 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
       if (ec != std::errc() || ptr != text.data() + e)
         throw InvalidInput(std::string(who) + ": " + path + " line " + std::to_string(line) + ": expected " + what +
                            ", found '" + printable(text.substr(i, std::min<size_t>(e - i, 40))) + "'");
+      if (one_per_line && !out.empty() && out.back().second == line)
+        throw InvalidInput(std::string(who) + ": " + path + " line " + std::to_string(line) + ": a second value '" +
+                           printable(text.substr(i, std::min<size_t>(e - i, 40))) + "' (one " + what + " per line)");
       if (out.size() == at_most)
         throw InvalidInput(std::string(who) + ": " + path + " line " + std::to_string(line) + ": more than " +
                            std::to_string(at_most) + " values (expected " + expected + ")");
@@ -158,7 +163,8 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
 Region read_sel(const std::string& path, int num_vertices) {
   const auto values = read_numbers<long>(path, "read_sel", "an integer selection code (0 fixed, 1 free, 2+ handle)",
                                          std::max(num_vertices, 0),
-                                         "one label per vertex of the " + std::to_string(num_vertices) + "-vertex mesh");
+                                         "one label per vertex of the " + std::to_string(num_vertices) + "-vertex mesh",
+                                         /*one_per_line=*/true);
   if (static_cast<int>(values.size()) != num_vertices)
     throw InvalidInput("read_sel: " + path + " has " + std::to_string(values.size()) + " labels but the mesh has " +
                        std::to_string(num_vertices) + " vertices");

@@ -202,6 +202,7 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
   FileContents soup;
   soup.points.reserve(static_cast<size_t>(nv));
   int extra_line = 0;  // a vertex line with more than three numbers (colours, or vertices that share lines)
+  long extra_vertex = 0;  // its vertex
   for (long i = 0; i < nv; ++i) {
     if (!reader.next(line)) {
       std::string why;
@@ -218,11 +219,21 @@ FileContents read_off(std::string_view text, const std::string& path, const std:
     if (!p.allFinite()) reader.fail("vertex has a non-finite coordinate (NaN or inf)");
     check_wrapped_record_end(reader, line, wrapped, "vertex", i, first_line);
     if (skip_attributes(line, reader, "vertex", i, "coordinates") && extra_line == 0)
-      extra_line = reader.number();
+      extra_line = reader.number(), extra_vertex = i;
     soup.points.push_back(p);
   }
   for (long f = 0; f < nf; ++f) {
-    if (!reader.next(line)) reader.fail("file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
+    if (!reader.next(line)) {
+      // Vertices with three numbers, then some with more: face lines read as vertices, if the header counts
+      // vertices that are not there.
+      std::string why;
+      if (extra_vertex > 0)
+        why = " (vertices 0 to " + std::to_string(extra_vertex - 1) + " have three numbers, vertex " +
+              std::to_string(extra_vertex) + " on line " + std::to_string(extra_line) +
+              " more: if the header's vertex count " + std::to_string(nv) +
+              " is too large, face lines were read as vertices from there)";
+      reader.fail("file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces" + why);
+    }
     const long n = parse_number<long>(next_token(line), reader, "a face corner count");
     if (n < 3) reader.fail("face " + std::to_string(f) + " has " + std::to_string(n) + " corners (at least 3 needed)");
     if (static_cast<unsigned long>(n) > reader.bytes_left() + line.size())

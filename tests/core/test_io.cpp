@@ -637,6 +637,11 @@ TEST_CASE("glued OFF headers, wrapped records, CR line ends and byte-order marks
   // Vertices packed several per line are read one per line: the message says so.
   CHECK_THROWS_WITH(load_soup(write("packed.off", "OFF\n4 0 0\n0 0 0 1 0 0\n1 1 0 0 1 0\n\n\n\n\n\n\n\n\n\n\n\n\n")),
                     Contains("file ends after 2 of 4 vertices") && Contains("line 3 has more than three numbers"));
+  // A header counting two vertices too many: the first face lines were read as vertices, and the message
+  // only said the file ended early in the faces.
+  CHECK_THROWS_WITH(load_soup(write("toomany.off", "OFF\n6 2 0\n" + vertices + faces + "\n")),
+                    Contains("file ends after 0 of 2 faces (vertices 0 to 3 have three numbers, vertex 4 on line 7 "
+                             "more: if the header's vertex count 6 is too large"));
   CHECK_THROWS_WITH(load_soup(write("word.off", "OFFICE\n")), Contains("not OFF followed by counts"));
   // Bytes that are not text are shown as \xHH.
   CHECK_THROWS_WITH(load_soup(write("bad.obj", "v 0 0 0\n\x01\x02 1 2\n")), Contains("'\\x01\\x02'"));

@@ -10,11 +10,19 @@
 #include <utility>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/core/solver.h"
 
 namespace msd {
+
+std::string check_time_factor(double time_factor) {
+  if (time_factor >= 1e-6 && time_factor <= 1e6) return {};
+  return "the time factor m (t = m h^2) must be in [1e-6, 1e6], got " + format_number(time_factor) +
+         " (1 is Crane et al.'s choice; beyond the range the heat operator's factorisation breaks down)";
+}
+
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -84,8 +92,7 @@ struct HeatGeodesics::Impl {
   static constexpr double kMaxStepsOfSqrtT = 500;
 
   Impl(const Positions& P, const Faces& F, HeatGeodesicsOptions o) : options(o), n(static_cast<int>(P.rows())) {
-    if (!(o.time_factor > 0) || !std::isfinite(o.time_factor))
-      throw InvalidInput("HeatGeodesics: time_factor must be positive and finite (got " + std::to_string(o.time_factor) + ")");
+    if (std::string why = check_time_factor(o.time_factor); !why.empty()) throw InvalidInput("HeatGeodesics: " + why);
     for (Eigen::Index f = 0; f < F.rows(); ++f)
       for (int k = 0; k < 3; ++k)
         if (F(f, k) < 0 || F(f, k) >= n)
@@ -116,7 +123,8 @@ struct HeatGeodesics::Impl {
       if (e.index() < 0) throw SolverError(std::string("HeatGeodesics: ") + e.what());  // not singular: e.g. out of memory
       // M > 0 and −W >= 0, so this is a numerical breakdown (e.g. coordinates of wildly different scales).
       throw SolverError("HeatGeodesics: factoring the heat operator M - tW failed near vertex " +
-                            std::to_string(e.index()) + "; try a larger time factor (--geodesic-time-factor, Python geodesic_time_factor)",
+                            std::to_string(e.index()) + "; try a " + (options.time_factor < 1 ? "larger" : "smaller") +
+                            " time factor (--geodesic-time-factor, Python geodesic_time_factor; 1 is Crane et al.'s)",
                         e.index());
     }
     heat_doublings = doublings;

@@ -4,6 +4,7 @@
 //! Used by the geodesic propagation field (deformation/propagation.h).
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "msdeform/core/types.h"
@@ -13,9 +14,13 @@ namespace msd {
 //! Settings of the heat-method geodesic distance.
 struct HeatGeodesicsOptions {
   //! m in the heat time step t = m·h² (h = mean edge length); Crane et al. recommend m = 1. Larger m
-  //! smooths the distance (less accurate, more robust on bad triangulations).
+  //! smooths the distance (less accurate, more robust on bad triangulations). In [1e-6, 1e6]: beyond, the
+  //! heat operator M − tW is dominated by one of its terms and its factorisation breaks down.
   double time_factor = 1.0;
 };
+
+//! Empty, or why `time_factor` is not in [1e-6, 1e6] (naming it and its value).
+std::string check_time_factor(double time_factor);
 
 //! Heat-method geodesic distances on a triangle mesh (Crane, Weischedel, Wardetzky 2013) with the cotan
 //! operators of core/laplacian.h:
@@ -37,7 +42,7 @@ struct HeatGeodesicsOptions {
 class HeatGeodesics {
  public:
   //! P: #V by 3, F: #F by 3. Builds the operators; factorisations happen in distance().
-  //! \throw InvalidInput if time_factor is not positive and finite or F indexes outside P.
+  //! \throw InvalidInput if time_factor is not in [1e-6, 1e6] or F indexes outside P.
   HeatGeodesics(const Positions& P, const Faces& F, HeatGeodesicsOptions options = {});
   ~HeatGeodesics();
   HeatGeodesics(HeatGeodesics&&) noexcept;

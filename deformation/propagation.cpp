@@ -136,9 +136,8 @@ TransformationPropagation::TransformationPropagation(PropagationOptions options)
     throw InvalidInput("propagate: unknown PropagationTransfer value");
   if (options_.blend != PropagationBlend::Matrix && options_.blend != PropagationBlend::Decomposed)
     throw InvalidInput("propagate: unknown PropagationBlend value");
-  if (!(options_.geodesic.time_factor > 0) || !std::isfinite(options_.geodesic.time_factor))
-    throw InvalidInput("propagate: geodesic.time_factor must be positive and finite (got " +
-                       std::to_string(options_.geodesic.time_factor) + ")");
+  if (std::string why = check_time_factor(options_.geodesic.time_factor); !why.empty())
+    throw InvalidInput("propagate: geodesic.time_factor: " + why);
 }
 
 void TransformationPropagation::do_prepare(const Positions& P, const Faces& F, const Region& region) {

@@ -77,7 +77,7 @@ struct PropagationOptions {
 class TransformationPropagation : public Deformer {
  public:
   //! \throw InvalidInput if transfer is Custom without custom_transfer, custom_transfer is set with
-  //! another transfer (it would be ignored), or time_factor is not positive and finite.
+  //! another transfer (it would be ignored), or time_factor is not in [1e-6, 1e6].
   explicit TransformationPropagation(PropagationOptions options = {});
   const std::string& name() const override { return name_; }
   //! Surface, linear, exact constraints, reproduces rigid motions; affine handles only.

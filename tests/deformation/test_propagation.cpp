@@ -392,4 +392,11 @@ TEST_CASE("propagation: misuse gives the Deformer's errors", "[deformation][prop
   PropagationOptions o;
   o.geodesic.time_factor = 0;
   CHECK_THROWS_AS(TransformationPropagation(o), InvalidInput);
+  // The range the CLI allows (Python took 1e30, then failed in the factorisation advising a larger one).
+  for (double m : {1e-7, 1e30, double(NAN)}) {
+    o.geodesic.time_factor = m;
+    CHECK_THROWS_WITH(TransformationPropagation(o), Catch::Matchers::Contains("must be in [1e-6, 1e6]"));
+  }
+  o.geodesic.time_factor = 1e6;
+  CHECK_NOTHROW(TransformationPropagation(o));
 }

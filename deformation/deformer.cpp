@@ -170,6 +170,12 @@ void Deformer::deform_to(const Positions& targets, Positions& out) {
                      std::to_string(num_constrained_) + " constrained (fixed and handle) vertices");
   begin_frame(out);
   check_finite(targets, name().c_str(), "the targets");
+  if (targets.size() > 0 && !(targets.cwiseAbs().maxCoeff() < kMaxExtent)) {  // as deform()'s transforms
+    Eigen::Index row = 0, col = 0;
+    targets.cwiseAbs().maxCoeff(&row, &col);
+    throw InvalidInput(name() + ": target " + std::to_string(row) + " has a coordinate of " +
+                       format_number(targets(row, col)) + "; msdeform works with sizes up to 1e70");
+  }
   do_deform_to(targets, out);
   end_frame(out);
 }

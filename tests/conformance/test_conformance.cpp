@@ -214,6 +214,10 @@ TEST_CASE("conformance: explicit targets equal the affine frame, and linear fram
       d.reset();
       d.deform_to(targets, by_targets);
       CHECK(test::max_row_distance(by_targets, out) <= 1e-8 * diag);
+      // Sizes beyond 1e70 are refused as in a transform (a target of 1e200 was taken).
+      Positions huge = targets;
+      huge(0, 1) = 1e200;
+      CHECK_THROWS_WITH(d.deform_to(huge, by_targets), Contains("target 0 has a coordinate of 1e+200"));
     } else {
       CHECK_THROWS_AS(d.deform_to(targets, by_targets), UsageError);
     }

@@ -109,6 +109,10 @@ void add_render_command(CLI::App& app) {
       o.scalar_label = name;
       std::printf("%s: values in [%.4g, %.4g]\n", name.c_str(), heights.minCoeff(), heights.maxCoeff());
     }
+    // A stray vertex far away frames the picture, and the rest of the shape is a dot in it.
+    if (const std::string w = extent_outlier_warning(c.P, c.F, "render"); !w.empty())
+      std::fprintf(stderr, "warning: %s; the picture frames every vertex, so the shape may be too small to see\n",
+                   w.c_str());
     render_png(c.P, c.F, *output, o);
     edit->write_built(c.region, c.transforms);
     std::printf("wrote %s (%dx%d, up %+.0f %+.0f %+.0f)\n", output->c_str(), o.width, o.height, o.up.x(), o.up.y(),

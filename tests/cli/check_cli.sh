@@ -156,6 +156,10 @@ open("stray.off", "w").write("\n".join(lines))
 PY
 "$msdeform" compare --mesh stray.off --sel lift.sel --def lift.def --methods shell,gradient -o cmp-stray >/dev/null 2>err.txt
 [ "$(grep -c "a few outlying vertices" err.txt)" = 1 ] || { cat err.txt; fail "compare did not warn of the stray vertex once"; }
+# render: the stray vertex frames the picture (the shape a dot in it, exit 0 without a word): said.
+"$msdeform" render stray.off -o stray.png >/dev/null 2>err.txt || fail "render of the plane with a stray vertex"
+grep -q "warning: render: a few outlying vertices.*the shape may be too small to see" err.txt ||
+  { cat err.txt; fail "render did not warn that a stray vertex frames the picture"; }
 # One edit's contact sheet fills rows (it was one column, 656 x 5188 pixels for 10 pictures).
 /usr/bin/python3 -c "import struct, sys; w, h = struct.unpack('>II', open(sys.argv[1], 'rb').read()[16:24]); sys.exit(0 if w > h else 1)" \
   cmp-stray/contact_sheet.png || fail "one edit's contact sheet is taller than wide"

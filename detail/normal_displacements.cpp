@@ -260,16 +260,33 @@ void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Posi
   std::vector<char> on_base(nb, 0);
   for (Eigen::Index f = 0; f < Fb.rows(); ++f)
     for (int k = 0; k < 3; ++k) on_base[Fb(f, k)] = 1;
-  // With S's connectivity, vertex i of S lies over its own connected component of B and is searched for
-  // there only: a nearer part of another component (a second sheet, the far side of a UV seam) would bind
-  // it to a surface that moves otherwise, and tear the result. face_component stays empty where B is one
-  // piece or has other connectivity.
-  std::vector<int> face_component, component;
-  if (Fs.rows() == Fb.rows() && ns == nb && Fs == Fb) {
-    component = vertex_components(Fb, nb);
-    if (*std::max_element(component.begin(), component.end()) > 0) {
-      face_component.resize(Fb.rows());
-      for (Eigen::Index f = 0; f < Fb.rows(); ++f) face_component[f] = component[Fb(f, 0)];
+  // Each vertex of S lies over one connected piece of B and is searched for there only: a nearer part of
+  // another piece (a second sheet, the far side of a UV seam) would bind it to a surface that moves
+  // otherwise, and tear the result. With S's connectivity vertex i's piece is its own; on a base with other
+  // connectivity (remeshed) each piece of S goes to the piece of B nearest to most of its vertices.
+  // face_component stays empty where B is one piece; piece[i] = -1: anywhere (a vertex no face uses).
+  std::vector<int> face_component, piece;
+  const std::vector<int> base_piece = vertex_components(Fb, nb);
+  if (*std::max_element(base_piece.begin(), base_piece.end()) > 0) {
+    face_component.resize(Fb.rows());
+    for (Eigen::Index f = 0; f < Fb.rows(); ++f) face_component[f] = base_piece[Fb(f, 0)];
+    if (Fs.rows() == Fb.rows() && ns == nb && Fs == Fb) {
+      piece = base_piece;
+    } else {
+      piece = vertex_components(Fs, static_cast<int>(ns));
+      const std::vector<ClosestPoint> nearest = closest.query_all(S);
+      std::vector<std::pair<int, int>> votes;  // (piece of S, piece of B nearest to one of its vertices)
+      for (long i = 0; i < ns; ++i)
+        if (piece[i] >= 0) votes.emplace_back(piece[i], face_component[nearest[i].face]);
+      std::sort(votes.begin(), votes.end());
+      std::vector<int> chosen(*std::max_element(piece.begin(), piece.end()) + 1, -1);
+      for (size_t a = 0, b = 0, most = 0; a < votes.size(); a = b) {
+        while (b < votes.size() && votes[b] == votes[a]) ++b;       // one run of equal votes
+        if (a == 0 || votes[a].first != votes[a - 1].first) most = 0;  // the first of a piece of S
+        if (b - a > most) most = b - a, chosen[votes[a].first] = votes[a].second;
+      }
+      for (long i = 0; i < ns; ++i)
+        if (piece[i] >= 0) piece[i] = chosen[piece[i]];
     }
   }
   Eigen::VectorXi face(ns);
@@ -282,11 +299,12 @@ void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Posi
       [&](long begin, long end) {
         for (long i = begin; i < end; ++i) {
           const Vec3 p = S.row(i);
-          const bool own_component =
-              !face_component.empty() && on_base[i];  // a vertex no face uses: anywhere
+          const bool restricted = !face_component.empty() && piece[i] >= 0;
+          // B's vertex i bounds the distance where it lies on the piece searched.
+          const bool bounds = i < nb && on_base[i] && (!restricted || base_piece[i] == piece[i]);
           const ClosestPoint start = closest.query(
-              p, i < nb && on_base[i] ? (p - Bc.row(i)).norm() : std::numeric_limits<double>::infinity(),
-              own_component ? face_component.data() : nullptr, own_component ? component[i] : -1);
+              p, bounds ? (p - Bc.row(i)).norm() : std::numeric_limits<double>::infinity(),
+              restricted ? face_component.data() : nullptr, restricted ? piece[i] : -1);
           int f = start.face;
           Vec3 w = start.barycentric;
           ok[i] = search.run(p, f, w, iterations[i], walks[i]);

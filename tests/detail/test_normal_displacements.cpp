@@ -121,6 +121,19 @@ TEST_CASE(
   lifted.bottomRows(n).col(2).array() += 1.0;
   nd.reconstruct(lifted, out);
   CHECK(test::max_row_distance(out.topRows(n), s.P) <= 1e-12);
+  // A base with other connectivity (a remeshed one): the same triangles, their corners listed from the
+  // second, so S's faces are not B's. Each piece of S goes to the piece of B nearest to most of its vertices
+  // (the bump tops of the first sheet were bound to the second).
+  Faces turned(2 * m, 3);
+  turned << F.col(1), F.col(2), F.col(0);
+  NormalDisplacements other;
+  other.encode(S, F, B, turned);
+  CHECK(other.report().fallback == 0);
+  CHECK((other.base_faces().head(n).array() < m).all());
+  CHECK((other.base_faces().tail(n).array() >= m).all());
+  CHECK((other.heights().head(n) - s.heights).cwiseAbs().maxCoeff() <= 1e-12);
+  other.reconstruct(lifted, out);
+  CHECK(test::max_row_distance(out.topRows(n), s.P) <= 1e-12);
 }
 
 TEST_CASE("normal displacements: Newton converges on the bumpy plane over a curved (smoothed) base",

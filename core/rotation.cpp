@@ -1,5 +1,8 @@
 #include "msdeform/core/rotation.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <Eigen/SVD>
 
 namespace msd {
@@ -31,6 +34,11 @@ PolarDecomposition polar_decomposition(const Mat3& A) {
   out.rotation = U * flip * V.transpose();
   out.stretch = V * sigma.asDiagonal() * V.transpose();
   return out;
+}
+
+double turn_degrees(const Mat3& A) {
+  const Mat3 R = polar_decomposition(A).rotation;
+  return std::acos(std::clamp((R.trace() - 1) / 2, -1.0, 1.0)) * 180 / 3.14159265358979323846;
 }
 
 }  // namespace msd

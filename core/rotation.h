@@ -25,4 +25,8 @@ struct PolarDecomposition {
 //! the smallest singular value). A singular A still gives a rotation R and R·S = A.
 PolarDecomposition polar_decomposition(const Mat3& A);
 
+//! The angle of A's polar rotation, in degrees in [0, 180] (scale and shear left out): how far a handle
+//! transform turns the handle from rest, up to whole turns (a matrix cannot tell 200° from −160°).
+double turn_degrees(const Mat3& A);
+
 }  // namespace msd

@@ -12,6 +12,7 @@
 #include "msdeform/analysis/metrics.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh_io.h"
+#include "msdeform/core/rotation.h"
 #include "msdeform/deformation/space_deformer.h"
 #include "msdeform/reconstruction/multiscale.h"
 
@@ -211,6 +212,12 @@ void add_deform_command(CLI::App& app) {
       const Vec3 sigma = Eigen::JacobiSVD<Mat3>(A).singularValues();
       const int rank = static_cast<int>((sigma.array() > 1e-12 * sigma(0)).count());
       const bool reflection = rank == 3 && (A / sigma(0)).determinant() < 0;
+      // A half turn (a .def can hold one; --rotate refuses it): which way round is not defined.
+      if (const double turn = turn_degrees(A); rank == 3 && !reflection && turn > 179.9)
+        std::fprintf(stderr, "warning: the transform of handle %zu is a half turn (%.6g degrees): which way round "
+                     "the handle turns is not defined, so methods that blend or iterate rotations (propagate, "
+                     "gradient, arap, primo, and multi-scale over them) may turn the region either way; give "
+                     "less than 180 degrees\n", k, turn);
       if (rank == 3 && !reflection) continue;
       const char* what = reflection  ? "a reflection: it turns the handle inside out"
                          : rank == 2 ? "singular: it flattens the handle onto a plane"

@@ -9,9 +9,9 @@
 #include <sstream>
 
 #include <Eigen/Geometry>
-#include <Eigen/SVD>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/rotation.h"
 
 namespace msd::view {
 namespace {
@@ -184,27 +184,14 @@ Mat4 Gizmo::drag(const OrbitCamera& camera, GizmoMode mode, GizmoPart part, cons
   return T;
 }
 
-namespace {
-// The rotation of A's polar decomposition (of a reflection: with one axis flipped).
-Mat3 polar_rotation(const Mat3& A) {
-  const Eigen::JacobiSVD<Mat3> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Mat3 U = svd.matrixU();
-  if ((U * svd.matrixV().transpose()).determinant() < 0) U.col(2) *= -1;
-  return U * svd.matrixV().transpose();
-}
-}  // namespace
-
-double turn_degrees(const Mat4& T) {
-  const Mat3 R = polar_rotation(T.topLeftCorner<3, 3>());
-  return std::acos(std::clamp((R.trace() - 1) / 2, -1.0, 1.0)) / kDegree;
-}
+double turn_degrees(const Mat4& T) { return msd::turn_degrees(Mat3(T.topLeftCorner<3, 3>())); }
 
 bool turn_stays_below_half(const Mat4& from, const Mat4& to) {
   // The shortest turn from one to the other is by θ about an axis; along it the handle's turn from rest
   // moves by at most θ/m per m-th, so checking m + 1 samples with that margin bounds it all the way
   // (conservative within 1° of 180°).
-  const Mat3 start = polar_rotation(from.topLeftCorner<3, 3>());
-  const Eigen::AngleAxisd turn(polar_rotation(to.topLeftCorner<3, 3>()) * start.transpose());
+  const Mat3 start = polar_decomposition(from.topLeftCorner<3, 3>()).rotation;
+  const Eigen::AngleAxisd turn(polar_decomposition(to.topLeftCorner<3, 3>()).rotation * start.transpose());
   const double theta = std::abs(turn.angle()) / kDegree;
   const int m = std::max(1, static_cast<int>(std::ceil(theta)));
   for (int i = 0; i <= m; ++i) {

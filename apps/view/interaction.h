@@ -81,8 +81,7 @@ struct Gizmo {
   Mat4 drag(const OrbitCamera& camera, GizmoMode mode, GizmoPart part, const Vec2& from, const Vec2& to) const;
 };
 
-// The angle in degrees, in [0, 180], of the rotation in T's linear part (the rotation of its polar
-// decomposition: scale and shear left out; a reflection's rotation part after flipping one axis).
+// The angle in degrees, in [0, 180], of the rotation in T's linear part (core/rotation.h).
 double turn_degrees(const Mat4& T);
 
 // Whether a handle turned by `from` stays below half a turn from rest all along the shortest turn to

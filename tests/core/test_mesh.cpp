@@ -31,6 +31,15 @@ Positions naive_normals(const Positions& P, const Faces& F) {
     if (N.row(v).norm() > 0) N.row(v).normalize();
   return N;
 }
+
+// nf random triangles over nv vertices: repeated and degenerate edges, edges of three or more faces,
+// unused vertices.
+Faces random_faces(std::mt19937& rng, int nv, int nf) {
+  Faces F(nf, 3);
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) F(f, k) = static_cast<int>(rng() % nv);
+  return F;
+}
 }  // namespace
 
 TEST_CASE("VertexNormals equals the sum of area-weighted face normals", "[core][mesh]") {
@@ -140,9 +149,7 @@ TEST_CASE("boundary_vertices are the ends of edges used by exactly one face, on 
   std::mt19937 rng(7);
   for (int trial = 0; trial < 500; ++trial) {
     const int nv = 1 + static_cast<int>(rng() % 25), nf = static_cast<int>(rng() % 40);
-    Faces F(nf, 3);
-    for (int f = 0; f < nf; ++f)
-      for (int k = 0; k < 3; ++k) F(f, k) = static_cast<int>(rng() % nv);
+    const Faces F = random_faces(rng, nv, nf);
     std::map<std::pair<int, int>, int> uses;
     for (int f = 0; f < nf; ++f)
       for (int k = 0; k < 3; ++k) {
@@ -171,9 +178,7 @@ TEST_CASE("vertex_components numbers the pieces in the order of their first face
   std::mt19937 rng(11);
   for (int trial = 0; trial < 500; ++trial) {
     const int nv = 1 + static_cast<int>(rng() % 30), nf = static_cast<int>(rng() % 20);
-    Faces F(nf, 3);
-    for (int f = 0; f < nf; ++f)
-      for (int k = 0; k < 3; ++k) F(f, k) = static_cast<int>(rng() % nv);
+    const Faces F = random_faces(rng, nv, nf);
     const VertexAdjacency adjacency = vertex_adjacency(F, nv);
     std::vector<int> want(nv, -1);
     int count = 0;

@@ -121,9 +121,10 @@ struct HeatGeodesics::Impl {
       heat.factor(A);
     } catch (const SolverError& e) {
       if (e.index() < 0) throw SolverError(std::string("HeatGeodesics: ") + e.what());  // not singular: e.g. out of memory
-      // M > 0 and −W >= 0, so this is a numerical breakdown (e.g. coordinates of wildly different scales).
+      // M > 0 and −W >= 0, so this is a numerical breakdown (e.g. coordinates of wildly different scales):
+      // a larger m smooths over bad triangles, until tW drowns M.
       throw SolverError("HeatGeodesics: factoring the heat operator M - tW failed near vertex " +
-                            std::to_string(e.index()) + "; try a " + (options.time_factor < 1 ? "larger" : "smaller") +
+                            std::to_string(e.index()) + "; try a " + (options.time_factor < 1e3 ? "larger" : "smaller") +
                             " time factor (--geodesic-time-factor, Python geodesic_time_factor; 1 is Crane et al.'s)",
                         e.index());
     }

@@ -115,8 +115,14 @@ namespace {
 
 // Whitespace-separated numbers of a text file with '#' comments, each with its line number. More than
 // at_most numbers (what the file should hold: expected) is an error at the first one too many, so a huge
-// file costs no more than a right one. one_per_line: a second number on a line is an error there (the
-// count would otherwise blame the file's last line).
+// file costs no more than a right one. one_per_line (a file with one number per line, like a .sel): the
+// errors about the count name the first line holding more than one, which explains them (the count alone
+// blamed the file's last line); such a line is read as it is.
+// Why a count is off, when a line of a file with one number per line holds more (0: none does).
+std::string shared(int line) {
+  return line > 0 ? "; line " + std::to_string(line) + " holds more than one (one per line is expected)" : "";
+}
+
 template <class T>
 std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char* who, const char* what,
                                             size_t at_most = SIZE_MAX, const std::string& expected = "",
@@ -124,7 +130,7 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
   const FileText file(path, who);
   const std::string_view text = file.text();
   std::vector<std::pair<T, int>> out;
-  int line = 1;
+  int line = 1, shared_line = 0;
   size_t i = 0;
   while (i < text.size()) {
     const char c = text[i];
@@ -145,12 +151,10 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
       if (ec != std::errc() || ptr != text.data() + e)
         throw InvalidInput(std::string(who) + ": " + path + " line " + std::to_string(line) + ": expected " + what +
                            ", found '" + printable(text.substr(i, std::min<size_t>(e - i, 40))) + "'");
-      if (one_per_line && !out.empty() && out.back().second == line)
-        throw InvalidInput(std::string(who) + ": " + path + " line " + std::to_string(line) + ": a second value '" +
-                           printable(text.substr(i, std::min<size_t>(e - i, 40))) + "' (one " + what + " per line)");
+      if (one_per_line && shared_line == 0 && !out.empty() && out.back().second == line) shared_line = line;
       if (out.size() == at_most)
         throw InvalidInput(std::string(who) + ": " + path + " line " + std::to_string(line) + ": more than " +
-                           std::to_string(at_most) + " values (expected " + expected + ")");
+                           std::to_string(at_most) + " values (expected " + expected + ")" + shared(shared_line));
       out.emplace_back(value, line);
       i = e;
     }
@@ -165,9 +169,13 @@ Region read_sel(const std::string& path, int num_vertices) {
                                          std::max(num_vertices, 0),
                                          "one label per vertex of the " + std::to_string(num_vertices) + "-vertex mesh",
                                          /*one_per_line=*/true);
-  if (static_cast<int>(values.size()) != num_vertices)
+  if (static_cast<int>(values.size()) != num_vertices) {
+    int line = 0;  // the first line with two labels, if any
+    for (size_t v = 1; v < values.size() && line == 0; ++v)
+      if (values[v].second == values[v - 1].second) line = values[v].second;
     throw InvalidInput("read_sel: " + path + " has " + std::to_string(values.size()) + " labels but the mesh has " +
-                       std::to_string(num_vertices) + " vertices");
+                       std::to_string(num_vertices) + " vertices" + shared(line));
+  }
   std::vector<int> codes(values.size());
   for (size_t v = 0; v < values.size(); ++v) {
     if (values[v].first < 0 || values[v].first > Region::kFirstHandle + static_cast<long>(values.size()) - 1)

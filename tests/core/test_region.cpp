@@ -96,9 +96,12 @@ TEST_CASE("bad selection and transform files give specific errors", "[core][regi
   for (int i = 0; i < 1000000; ++i) many += "1\n";
   CHECK_THROWS_WITH(read_sel(write("many.sel", many), 3),
                     Contains("line 4") && Contains("more than 3 values (expected one label per vertex"));
-  // Two labels on one line: named there (it said "line 4: more than 3 values", the file's last line).
+  // Two labels on one line: the line is named (it said only "line 4: more than 3 values", the file's last).
   CHECK_THROWS_WITH(read_sel(write("two.sel", "0\n1 2\n1\n"), 3),
-                    Contains("two.sel line 2: a second value '2' (one an integer selection code"));
+                    Contains("two.sel line 3: more than 3 values") && Contains("line 2 holds more than one"));
+  CHECK_THROWS_WITH(read_sel(write("short.sel", "0 1\n1\n"), 4),
+                    Contains("has 3 labels but the mesh has 4 vertices; line 1 holds more than one"));
+  CHECK(read_sel(write("row.sel", "0 1 2\n"), 3).handle_of(2) == 0);  // the count right: read as it is
   CHECK_THROWS_WITH(read_dmat_groups(write("many.dmat", "1 3\n" + many), 3),
                     Contains("line 5") && Contains("more than 5 values"));
 }

@@ -284,9 +284,13 @@ double mean_edge_length(const Positions& P, const Faces& F) {
 }
 
 double signed_volume(const Positions& P, const Faces& F) {
+  // Tetrahedra from the bounding box's centre, not the origin: the same sum for a closed mesh, without
+  // the cancellation of terms of size |p|³ (the knight at an offset of 1e6 read −199.8 for 0.0245).
+  if (P.rows() == 0) return 0;
+  const Vec3 o = (P.colwise().minCoeff() + P.colwise().maxCoeff()).transpose() / 2;
   double six_volume = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Vec3 a = P.row(F(f, 0)), b = P.row(F(f, 1)), c = P.row(F(f, 2));
+    const Vec3 a = P.row(F(f, 0)).transpose() - o, b = P.row(F(f, 1)).transpose() - o, c = P.row(F(f, 2)).transpose() - o;
     six_volume += a.dot(b.cross(c));
   }
   return six_volume / 6.0;

@@ -93,8 +93,9 @@ double mean_edge_length(const Positions& P, const Faces& F);
 //! Uniform (graph) Laplacian in symmetric form: W_ij = 1 per edge, W_ii = -degree. Δ_uniform = D⁻¹ W.
 SparseMatrix uniform_laplacian(const Faces& F, int num_vertices);
 
-//! Σ_f p0 · (p1 × p2) / 6 over the faces of (P, F): the enclosed volume of a closed, consistently oriented
-//! mesh (divergence theorem; positive for outward faces). Indices are not checked here.
+//! Σ_f (p0 − o) · ((p1 − o) × (p2 − o)) / 6 over the faces of (P, F), o the bounding box's centre: the
+//! enclosed volume of a closed, consistently oriented mesh (divergence theorem; positive for outward
+//! faces), the same wherever the mesh sits. Indices are not checked here.
 double signed_volume(const Positions& P, const Faces& F);
 
 //! #F triangle areas.

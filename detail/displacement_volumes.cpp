@@ -8,12 +8,16 @@
 #include <string>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
+#include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/detail/phong.h"
 
 namespace msd {
 namespace {
 
+// The sizes (bounding-box diagonals) the encoding takes: its volumes and their squares stay in range.
+constexpr double kMinSize = 1e-50, kMaxSize = 1e50;
 // A base triangle below this fraction of the mean S-triangle area makes a degenerate prism.
 constexpr double kDegenerateBaseArea = 1e-10;
 // Weights of a corner's kite in the blended prism: V_t,i = m · (22 d_i + 7 d_j + 7 d_k) / 216.
@@ -258,6 +262,12 @@ void DisplacementVolumes::encode(const Positions& S, const Faces& Fs, const Posi
   check_faces(Fb, B.rows(), where, "B");
   check_finite(S, where, "S");
   check_finite(B, where, "B");
+  // Prism volumes go as size³ and the relaxation squares them: beyond 1e±50 they leave double's range (the
+  // knight scaled by 1e65 came out 3 % of its diagonal off, with folds, and exit 0).
+  if (const double size = bounding_box_diagonal(S); !(size >= kMinSize && size <= kMaxSize))
+    throw InvalidInput(std::string(where) + ": S's bounding-box diagonal is " + format_number(size) +
+                       "; the displacement volumes (size³) work with diagonals from 1e-50 to 1e50: scale the mesh, "
+                       "or use the normal, vectors or transfer encoding");
 
   encoded_ = false;  // stays so if anything below throws
   have_previous_ = false;

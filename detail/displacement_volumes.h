@@ -184,7 +184,8 @@ class DisplacementVolumes : public DetailEncoding {
 
   //! S: #Vs by 3 with faces Fs (#Fs by 3); B: #Vb by 3 with faces Fb (#Fb by 3); connectivities may differ.
   //! \throw InvalidInput for a face index out of range, a non-finite coordinate, an empty Fs or Fb, an
-  //! anchor out of range, or an option out of range; as NormalDisplacements::encode().
+  //! anchor out of range, an option out of range, or S's bounding-box diagonal outside [1e-50, 1e50] (its
+  //! volumes and their squares would leave double's range); as NormalDisplacements::encode().
   void encode(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) override;
 
   //! S' (#Vs by 3) over the deformed base B' (#Vb by 3, connectivity Fb). Allocation-free once `out` has

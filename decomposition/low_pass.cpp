@@ -149,6 +149,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
   Positions B;
   if (system.all_known()) {  // no detail layer: the base is S
     r.all_boundary = true;
+    r.no_layer_reason = "every vertex lies on the mesh boundary, which the low-pass keeps in place";
     r.automatic = options.detail_scale == 0;
     B = S;
     r.check = check_details(S, B, F);
@@ -183,8 +184,19 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
         progress(line);
       }
       if (check.fold_ratio_p999 > options.max_fold_ratio || check.folding_vertices > allowed_folds ||
-          area_ratio < kMinAreaRatio)
-        break;  // from here on the base loses the shape, not just the details
+          area_ratio < kMinAreaRatio) {  // from here on the base loses the shape, not just the details
+        char why[240];
+        if (check.folding_vertices > allowed_folds)
+          std::snprintf(why, sizeof why, "the details of %ld vertices fold over it", check.folding_vertices);
+        else if (area_ratio < kMinAreaRatio)
+          std::snprintf(why, sizeof why, "its area is %.3g of the mesh's", area_ratio);
+        else
+          std::snprintf(why, sizeof why, "its details come close to folding: fold ratio %.3g at the 99.9th "
+                        "percentile, above %.3g", check.fold_ratio_p999, options.max_fold_ratio);
+        r.no_layer_reason = "the candidate scale " + format_number(L) + " already removes shape (" + why +
+                            ") before the detail heights stopped growing";
+        break;
+      }
       if (k > 0 && check.rms_height < options.plateau_growth * previous_rms) {
         r.detail_scale = L;
         r.check = check;
@@ -194,6 +206,9 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
       previous_rms = check.rms_height;
     }
     if (r.detail_scale == 0) {  // no separate detail layer: the base is S itself
+      if (r.no_layer_reason.empty())
+        r.no_layer_reason = "the detail heights grow with every scale tried (up to " +
+                            format_number(options.max_scale_fraction) + " of the diameter)";
       B = S;
       r.check = check_details(S, B, F);
     }

@@ -61,6 +61,10 @@ struct LowPassReport {
   //! Every vertex a face uses lies on the mesh boundary (a strip, one triangle), which the low-pass keeps in
   //! place: B = S, no details.
   bool all_boundary = false;
+  //! Why B = S (detail_scale 0), in words: every vertex on the boundary; the automatic search stopped at
+  //! a candidate that removes shape (its details close to folding, folding, or its area lost) before the
+  //! detail heights stopped growing; or they grew at every scale tried. Empty when there is a detail layer.
+  std::string no_layer_reason;
   double seconds = 0;  //!< of the computation (also when the base came from a LowPassCache)
   bool reused = false;  //!< taken from a LowPassCache: computed by an earlier call with the same S, F and options
 };

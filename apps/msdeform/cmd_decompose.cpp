@@ -86,11 +86,9 @@ void add_decompose_command(CLI::App& app) {
           std::printf("  base: low-pass at detail scale %.10g (%s; mean edge length %.4g)\n",
                       report.low_pass.detail_scale, report.low_pass.automatic ? "chosen automatically" : "given",
                       report.low_pass.mean_edge_length);
-        else if (report.low_pass.all_boundary)
-          std::printf("  base: the mesh itself: every vertex is on the mesh boundary, which the low-pass keeps in place\n");
         else
-          std::printf("  base: the mesh itself: the detail heights grow with every scale tried, so there is no "
-                      "separate detail layer (--detail-scale sets one)\n");
+          std::printf("  base: the mesh itself, no separate detail layer: %s%s\n", report.low_pass.no_layer_reason.c_str(),
+                      report.low_pass.all_boundary ? "" : " (--detail-scale sets one)");
         for (const auto& k : report.low_pass.candidates) {
           std::printf("    tried %-10.4g", k.detail_scale);
           print_check("", k.check);

@@ -158,8 +158,8 @@ void add_deform_command(CLI::App& app) {
         std::printf("  base: low-pass at detail scale %.4g (%s)\n", d.low_pass.detail_scale,
                     d.low_pass.automatic ? "chosen automatically; --detail-scale sets it" : "given");
       else if (low_pass)
-        std::printf("  base: the mesh itself (%s)\n", d.low_pass.all_boundary ? "every vertex is on the mesh boundary"
-                                                                  : "no separate detail layer found; --detail-scale sets one");
+        std::printf("  base: the mesh itself, no separate detail layer (%s%s)\n", d.low_pass.no_layer_reason.c_str(),
+                    d.low_pass.all_boundary ? "" : "; --detail-scale sets one");
       else if (d.kind == DecompositionKind::Fairing)
         std::printf("  base: faired free region\n");
       else

@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/core/scenes.h"
@@ -18,6 +19,7 @@ TEST_CASE("low-pass base: the automatic scale removes the bumps and keeps the pl
   LowPassReport report;
   const Positions B = low_pass_base(s.P, s.F, {}, &report);
   INFO("detail scale " << report.detail_scale << ", max height " << report.check.max_height);
+  CHECK(report.no_layer_reason.empty());
   CHECK(report.automatic);
   CHECK(report.detail_scale > 0.1);  // longer than the bumps (on a 0.1 lattice)
   CHECK(report.check.fold_ratio_p999 <= 0.5);
@@ -53,6 +55,15 @@ TEST_CASE("low-pass base: a cylinder keeps its radius (fairing shrank it to a th
   LowPassReport report;
   const Positions B = low_pass_base(P, F, {}, &report);
   INFO("detail scale " << report.detail_scale);
+  // No detail layer on a smooth tube, and the reason is the one the search stopped at (the break test's
+  // camel stopped at a fold ratio of 0.526 and was told the heights "grow with every scale tried").
+  CHECK(report.detail_scale == 0);
+  const LowPassCandidate& last = report.candidates.back();
+  if (last.area_ratio < 0.5 || last.check.fold_ratio_p999 > 0.5)
+    CHECK_THAT(report.no_layer_reason, Catch::Matchers::StartsWith("the candidate scale " + format_number(last.detail_scale) +
+                                                                   " already removes shape ("));
+  else
+    CHECK_THAT(report.no_layer_reason, Catch::Matchers::StartsWith("the detail heights grow with every scale tried"));
   for (int v = 0; v < P.rows(); ++v) {
     if (P(v, 2) < 2 || P(v, 2) > 10) continue;  // the open ends may move a little
     CHECK(std::hypot(B(v, 0), B(v, 1)) == Approx(1).epsilon(0.02));
@@ -110,6 +121,7 @@ TEST_CASE("low-pass base: a mesh whose vertices all lie on its boundary is its o
       CHECK(low_pass_base(X, F, options, &report) == X);
       CHECK(report.detail_scale == 0);
       CHECK(report.all_boundary);
+      CHECK(report.no_layer_reason == "every vertex lies on the mesh boundary, which the low-pass keeps in place");
     }
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "msdeform/core/adjacency.h"
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/extent.h"
@@ -64,6 +65,28 @@ std::string check_decomposition(const DecompositionReport& r, const Decompositio
     return "decompose: the details of " + vertices + " fold over at rest (" + where + "): " + remedy(r);
   return std::string("decompose: the details come close to folding over the base (") + where +
          "); an edit that bends the base further may fold them: " + remedy(r);
+}
+
+// Empty, or a warning naming a connected piece of S whose base lost its shape (area below half of the
+// piece's) while the whole kept it: a small part's details are then its whole shape, and fold or stretch
+// under an edit (an icosahedron of radius 0.01 beside the bunny, at detail scale 0.1).
+std::string collapsed_piece_warning(const Positions& S, const Positions& B, const Faces& F) {
+  const std::vector<int> piece = vertex_components(F, static_cast<int>(S.rows()));
+  const int pieces = 1 + *std::max_element(piece.begin(), piece.end());
+  if (pieces < 2) return {};
+  std::vector<double> before(pieces, 0), after(pieces, 0);
+  const Eigen::VectorXd a = face_areas(S, F), b = face_areas(B, F);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) before[piece[F(f, 0)]] += a[f], after[piece[F(f, 0)]] += b[f];
+  for (int k = 0; k < pieces; ++k)
+    if (before[k] > 0 && after[k] < kMinBaseAreaRatio * before[k]) {
+      const int v = static_cast<int>(std::find(piece.begin(), piece.end(), k) - piece.begin());
+      char text[320];
+      std::snprintf(text, sizeof text, "decompose: the base lost the shape of one piece of the mesh (the piece of "
+                    "vertex %d: its base has %.3g of its area), so its details are its whole shape and fold or "
+                    "stretch under an edit; a smaller detail scale keeps it", v, after[k] / before[k]);
+      return text;
+    }
+  return {};
 }
 
 // Remeshes B (the low-pass base) and moves the roles onto it. A remeshed base must stay as close to S as
@@ -170,9 +193,12 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
   }
   report.area_ratio = free_area_ratio(S, d.base, F, region);
   report.warning = check_decomposition(report, o, S.rows());
-  if (report.low_pass.all_boundary)
-    report.warning = "decompose: every vertex lies on the mesh boundary, which the low-pass base keeps in place, so "
-                     "the base is the mesh itself and there are no details (an edit is the base method's alone)";
+  if (o.kind == DecompositionKind::LowPass && !report.low_pass.no_layer_reason.empty())
+    report.warning = "decompose: no separate detail layer (" + report.low_pass.no_layer_reason +
+                     "), so the base is the mesh itself and there are no details: an edit is the base method's alone" +
+                     (report.low_pass.all_boundary ? "" : "; --detail-scale sets a layer");
+  else if (report.warning.empty())
+    report.warning = collapsed_piece_warning(S, d.base, F);
   if (o.kind == DecompositionKind::Remeshed)
     remesh_base(S, region, o.remesh_edge_length > 0 ? o.remesh_edge_length : mean_edge_length(S, F), d);
   // Without a detail layer (B = S, see low_pass_base) every encoding would give S' = B'.

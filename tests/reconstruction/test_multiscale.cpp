@@ -208,7 +208,9 @@ TEST_CASE("multiscale: CGAL's cactus runs with the default base, and a collapsin
   const std::vector<Mat4> T = read_def(test::cgal_deformation_data("cactus.def"));
   MultiscaleDeformer ms;  // low-pass base at the automatic detail scale
   ms.prepare(cactus, region);
-  CHECK(ms.decomposition_report().warning.empty());
+  // Nothing folds or collapses; where no detail layer is found, that alone is said.
+  const std::string& warning = ms.decomposition_report().warning;
+  CHECK((warning.empty() || warning.rfind("decompose: no separate detail layer (", 0) == 0));
   CHECK(ms.deform(T).allFinite());
   MultiscaleOptions faired;
   faired.decomposition.kind = DecompositionKind::Fairing;
@@ -347,6 +349,46 @@ TEST_CASE("multiscale: a mesh with no interior vertex (a strip, a triangle) is t
       CHECK((out - expected).cwiseAbs().maxCoeff() < 1e-12);
     }
   }
+}
+
+TEST_CASE("multiscale: a piece of the mesh whose base collapses, and a mesh without a detail layer, are warned about",
+          "[reconstruction][multiscale]") {
+  // Break test: an icosahedron of radius 0.01 beside the bunny shrank to 0.00064 in the base at detail
+  // scale 0.1 without a word (its details were its whole shape, and folded under transfer); and with no
+  // detail layer the four multi-scale rows of compare equalled the shell's without saying why.
+  const Scene s = scene("lift");
+  Positions ball;
+  Faces ball_faces;
+  test::icosphere(1, ball, ball_faces);
+  ball = (0.005 * ball).rowwise() + Eigen::RowVector3d(0.5, 0.5, 1);  // above the plane, a bump's size
+  Positions P(s.P.rows() + ball.rows(), 3);
+  P << s.P, ball;
+  Faces F(s.F.rows() + ball_faces.rows(), 3);
+  F << s.F, ball_faces.array() + static_cast<int>(s.P.rows());
+  std::vector<int> codes = s.region.codes();
+  codes.resize(P.rows(), Region::kFixed);  // the ball stays
+  MultiscaleOptions o;
+  o.decomposition.low_pass.detail_scale = 0.3;
+  MultiscaleDeformer with_ball(o);
+  with_ball.prepare(P, F, Region::from_codes(codes));
+  const auto said = [](const MultiscaleDeformer& d, const std::string& what) {
+    return std::any_of(d.prepare_warnings().begin(), d.prepare_warnings().end(),
+                       [&](const std::string& w) { return w.find(what) != std::string::npos; });
+  };
+  CHECK(said(with_ball, "the base lost the shape of one piece of the mesh (the piece of vertex " +
+                            std::to_string(s.P.rows())));
+  MultiscaleDeformer plane(o);
+  plane.prepare(s.P, s.F, s.region);
+  CHECK_FALSE(said(plane, "lost the shape"));
+  CHECK_FALSE(said(plane, "no separate detail layer"));
+  // A smooth tube has no detail layer: the edit is the base method's, and prepare says so.
+  const Scene tube = scene("bend120");
+  Positions smooth = tube.smooth;
+  MultiscaleDeformer none{MultiscaleOptions{}};
+  none.prepare(smooth, tube.F, tube.region);
+  REQUIRE(none.decomposition_report().low_pass.detail_scale == 0);
+  CHECK(said(none, "no separate detail layer ("));
+  CHECK(said(none, "an edit is the base method's alone; --detail-scale sets a layer"));
 }
 
 TEST_CASE("multiscale: the frame report counts folded triangles", "[reconstruction][multiscale]") {

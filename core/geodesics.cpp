@@ -92,7 +92,8 @@ struct HeatGeodesics::Impl {
   static constexpr double kMaxStepsOfSqrtT = 500;
 
   Impl(const Positions& P, const Faces& F, HeatGeodesicsOptions o) : options(o), n(static_cast<int>(P.rows())) {
-    if (std::string why = check_time_factor(o.time_factor); !why.empty()) throw InvalidInput("HeatGeodesics: " + why);
+    if (std::string why = check_time_factor(o.time_factor); !why.empty())
+      throw InvalidInput("HeatGeodesics: " + why);
     for (Eigen::Index f = 0; f < F.rows(); ++f)
       for (int k = 0; k < 3; ++k)
         if (F(f, k) < 0 || F(f, k) >= n)
@@ -123,10 +124,11 @@ struct HeatGeodesics::Impl {
       if (e.index() < 0) throw SolverError(std::string("HeatGeodesics: ") + e.what());  // not singular: e.g. out of memory
       // M > 0 and −W >= 0, so this is a numerical breakdown (e.g. coordinates of wildly different scales):
       // a larger m smooths over bad triangles, until tW drowns M.
-      throw SolverError("HeatGeodesics: factoring the heat operator M - tW failed near vertex " +
-                            std::to_string(e.index()) + "; try a " + (options.time_factor < 1e3 ? "larger" : "smaller") +
-                            " time factor (--geodesic-time-factor, Python geodesic_time_factor; 1 is Crane et al.'s)",
-                        e.index());
+      throw SolverError(
+          "HeatGeodesics: factoring the heat operator M - tW failed near vertex " +
+              std::to_string(e.index()) + "; try a " + (options.time_factor < 1e3 ? "larger" : "smaller") +
+              " time factor (--geodesic-time-factor, Python geodesic_time_factor; 1 is Crane et al.'s)",
+          e.index());
     }
     heat_doublings = doublings;
   }

@@ -201,7 +201,8 @@ double free_area_ratio(const Positions& rest, const Positions& deformed, const F
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const double a = exact_area(rest, F, f), b = exact_area(deformed, F, f);
     all_before += a, all_after += b;
-    if (region.is_free(F(f, 0)) || region.is_free(F(f, 1)) || region.is_free(F(f, 2))) before += a, after += b;
+    if (region.is_free(F(f, 0)) || region.is_free(F(f, 1)) || region.is_free(F(f, 2)))
+      before += a, after += b;
   }
   return before > 0 ? after / before : all_before > 0 ? all_after / all_before : 1.0;
 }
@@ -290,7 +291,8 @@ double signed_volume(const Positions& P, const Faces& F) {
   const Vec3 o = (P.colwise().minCoeff() + P.colwise().maxCoeff()).transpose() / 2;
   double six_volume = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Vec3 a = P.row(F(f, 0)).transpose() - o, b = P.row(F(f, 1)).transpose() - o, c = P.row(F(f, 2)).transpose() - o;
+    const Vec3 a = P.row(F(f, 0)).transpose() - o, b = P.row(F(f, 1)).transpose() - o,
+               c = P.row(F(f, 2)).transpose() - o;
     six_volume += a.dot(b.cross(c));
   }
   return six_volume / 6.0;

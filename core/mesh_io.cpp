@@ -704,7 +704,8 @@ FileContents read_contents(const std::string& path, const std::string& who) {
 // others). A polygon whose corners lie on a line keeps its fan (its triangles are degenerate, which
 // check_surface reports).
 enum class PolygonSplit { Fan, EarClipped, CrossesItself };
-PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, int n, std::vector<std::array<int, 3>>& out) {
+PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, int n,
+                           std::vector<std::array<int, 3>>& out) {
   Vec3 normal = Vec3::Zero();  // Newell: twice the vector area, whatever the first corner
   for (int k = 0; k < n; ++k) normal += points[corner[k]].cross(points[corner[(k + 1) % n]]);
   const Vec3& p0 = points[corner[0]];
@@ -738,10 +739,10 @@ PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, i
     for (int i = 0; i < m && !clipped; ++i) {
       const int a = left[(i + m - 1) % m], b = left[i], c = left[(i + 1) % m];
       if (!(turn(a, b, c) > 0)) continue;  // a reflex or straight corner is no ear
-      bool empty = true;  // no other corner inside or on the ear
+      bool empty = true;                   // no other corner inside or on the ear
       for (int j : left)
-        if (j != a && j != b && j != c && q[j] != q[a] && q[j] != q[b] && q[j] != q[c] && turn(a, b, j) >= 0 &&
-            turn(b, c, j) >= 0 && turn(c, a, j) >= 0)
+        if (j != a && j != b && j != c && q[j] != q[a] && q[j] != q[b] && q[j] != q[c] &&
+            turn(a, b, j) >= 0 && turn(b, c, j) >= 0 && turn(c, a, j) >= 0)
           empty = false;
       if (!empty) continue;
       out.push_back({corner[a], corner[b], corner[c]});
@@ -799,8 +800,9 @@ TriangleSoup triangulate(const FileContents& soup, const std::string& path, cons
     ++report.polygons_triangulated;
     const PolygonSplit split = split_polygon(soup.points, corner, n, triangles);
     if (split == PolygonSplit::CrossesItself)
-      throw InvalidInput(who + ": " + path + (soup.lines[f] > 0 ? " line " + std::to_string(soup.lines[f]) : "") +
-                         ": face " + std::to_string(f) + " is a polygon of " + std::to_string(n) +
+      throw InvalidInput(who + ": " + path +
+                         (soup.lines[f] > 0 ? " line " + std::to_string(soup.lines[f]) : "") + ": face " +
+                         std::to_string(f) + " is a polygon of " + std::to_string(n) +
                          " corners that crosses itself (in the plane of its normal): no split into triangles "
                          "keeps it as drawn; split it into triangles or simple polygons in the modeller");
     report.concave_polygons += split == PolygonSplit::EarClipped;

@@ -13,7 +13,7 @@ struct LoadReport {
   //! Faces with more than 3 corners, split into triangles: fans from their first corner, or for a concave
   //! polygon (whose fan would turn a triangle over) by ear clipping in the plane of its normal.
   int polygons_triangulated = 0;
-  int concave_polygons = 0;  //!< of those, the ones split by ear clipping
+  int concave_polygons = 0;          //!< of those, the ones split by ear clipping
   int degenerate_faces_skipped = 0;  //!< faces that repeat a vertex index (dropped)
   int duplicate_faces_dropped = 0;   //!< triangles with the vertex set of an earlier one (dropped)
   int faces_flipped = 0;             //!< load_mesh: triangles turned over to agree with their neighbours
@@ -33,14 +33,13 @@ struct TriangleSoup {
 };
 
 //! Loads a file as it is: its vertices exactly (count and order: selection files index them) and its
-//! faces as triangles (polygons split into fans, or concave ones by ear clipping; faces that repeat a vertex index
-//! and triangles with the vertex set of an earlier one dropped, counted in the report). No face is needed:
-//! an OFF with 0 faces, a PLY with only a vertex element or an OBJ with only `v` lines is a point cloud.
-//! Orientation and manifoldness are not looked at (see check_surface). An STL's vertices are its distinct
-//! corner positions in the order they first appear.
-//! \throw InvalidInput with file and line for: a missing or unreadable file, an unknown extension, a
-//! malformed header or number, a non-finite coordinate, a face index out of range, a polygon that
-//! crosses itself, no vertices at all.
+//! faces as triangles (polygons split into fans, or concave ones by ear clipping; faces that repeat a vertex
+//! index and triangles with the vertex set of an earlier one dropped, counted in the report). No face is
+//! needed: an OFF with 0 faces, a PLY with only a vertex element or an OBJ with only `v` lines is a point
+//! cloud. Orientation and manifoldness are not looked at (see check_surface). An STL's vertices are its
+//! distinct corner positions in the order they first appear. \throw InvalidInput with file and line for: a
+//! missing or unreadable file, an unknown extension, a malformed header or number, a non-finite coordinate, a
+//! face index out of range, a polygon that crosses itself, no vertices at all.
 TriangleSoup load_soup(const std::string& path, LoadReport* report = nullptr);
 
 //! Loads a manifold triangle mesh: load_soup, then check_surface (core/surface_check.h). Faces wound

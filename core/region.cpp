@@ -154,7 +154,8 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
       if (one_per_line && shared_line == 0 && !out.empty() && out.back().second == line) shared_line = line;
       if (out.size() == at_most)
         throw InvalidInput(std::string(who) + ": " + path + " line " + std::to_string(line) + ": more than " +
-                           std::to_string(at_most) + " values (expected " + expected + ")" + shared(shared_line));
+                           std::to_string(at_most) + " values (expected " + expected + ")" +
+                           shared(shared_line));
       out.emplace_back(value, line);
       i = e;
     }
@@ -165,16 +166,17 @@ std::vector<std::pair<T, int>> read_numbers(const std::string& path, const char*
 }  // namespace
 
 Region read_sel(const std::string& path, int num_vertices) {
-  const auto values = read_numbers<long>(path, "read_sel", "an integer selection code (0 fixed, 1 free, 2+ handle)",
-                                         std::max(num_vertices, 0),
-                                         "one label per vertex of the " + std::to_string(num_vertices) + "-vertex mesh",
-                                         /*one_per_line=*/true);
+  const auto values = read_numbers<long>(
+      path, "read_sel", "an integer selection code (0 fixed, 1 free, 2+ handle)", std::max(num_vertices, 0),
+      "one label per vertex of the " + std::to_string(num_vertices) + "-vertex mesh",
+      /*one_per_line=*/true);
   if (static_cast<int>(values.size()) != num_vertices) {
     int line = 0;  // the first line with two labels, if any
     for (size_t v = 1; v < values.size() && line == 0; ++v)
       if (values[v].second == values[v - 1].second) line = values[v].second;
-    throw InvalidInput("read_sel: " + path + " has " + std::to_string(values.size()) + " labels but the mesh has " +
-                       std::to_string(num_vertices) + " vertices" + shared(line));
+    throw InvalidInput("read_sel: " + path + " has " + std::to_string(values.size()) +
+                       " labels but the mesh has " + std::to_string(num_vertices) + " vertices" +
+                       shared(line));
   }
   std::vector<int> codes(values.size());
   for (size_t v = 0; v < values.size(); ++v) {

@@ -33,7 +33,9 @@ class Region {
   bool placed_together(int u, int v) const { return codes_[u] == codes_[v] && codes_[u] != kFree; }
   //! Placed by different transforms (fixed and a handle, or two handles): nothing deforms between them, so
   //! the edit stretches or tears the edge (u, v).
-  bool placed_apart(int u, int v) const { return codes_[u] != codes_[v] && codes_[u] != kFree && codes_[v] != kFree; }
+  bool placed_apart(int u, int v) const {
+    return codes_[u] != codes_[v] && codes_[u] != kFree && codes_[v] != kFree;
+  }
   //! Handle index of v, or -1 if v is fixed or free.
   int handle_of(int v) const { return codes_[v] >= kFirstHandle ? codes_[v] - kFirstHandle : -1; }
 

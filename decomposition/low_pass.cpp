@@ -191,8 +191,10 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
         else if (area_ratio < kMinAreaRatio)
           std::snprintf(why, sizeof why, "its area is %.3g of the mesh's", area_ratio);
         else
-          std::snprintf(why, sizeof why, "its details come close to folding: fold ratio %.3g at the 99.9th "
-                        "percentile, above %.3g", check.fold_ratio_p999, options.max_fold_ratio);
+          std::snprintf(why, sizeof why,
+                        "its details come close to folding: fold ratio %.3g at the 99.9th "
+                        "percentile, above %.3g",
+                        check.fold_ratio_p999, options.max_fold_ratio);
         r.no_layer_reason = "the candidate scale " + format_number(L) + " already removes shape (" + why +
                             ") before the detail heights stopped growing";
         break;

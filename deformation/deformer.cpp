@@ -103,10 +103,11 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
   } catch (const SolverError& e) {
     // A solver blames the neighbourhood where it broke down (a degenerate one, a singular system); a stray
     // vertex far from the rest is the likelier cause, and its warning would not be seen after the error.
-    const auto stray = std::find_if(prepare_warnings_.begin(), prepare_warnings_.end(), [](const std::string& w) {
-      return w.find(kOutlierWarning) != std::string::npos;
-    });
-    if (stray == prepare_warnings_.end() || std::string(e.what()).find(kOutlierWarning) != std::string::npos) throw;
+    const auto stray =
+        std::find_if(prepare_warnings_.begin(), prepare_warnings_.end(),
+                     [](const std::string& w) { return w.find(kOutlierWarning) != std::string::npos; });
+    if (stray == prepare_warnings_.end() || std::string(e.what()).find(kOutlierWarning) != std::string::npos)
+      throw;
     throw SolverError(std::string(e.what()) + ". Note: " + *stray, e.index());
   }
   prepare_failed_ = false;

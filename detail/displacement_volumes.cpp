@@ -265,9 +265,10 @@ void DisplacementVolumes::encode(const Positions& S, const Faces& Fs, const Posi
   // Prism volumes go as size³ and the relaxation squares them: beyond 1e±50 they leave double's range (the
   // knight scaled by 1e65 came out 3 % of its diagonal off, with folds, and exit 0).
   if (const double size = bounding_box_diagonal(S); !(size >= kMinSize && size <= kMaxSize))
-    throw InvalidInput(std::string(where) + ": S's bounding-box diagonal is " + format_number(size) +
-                       "; the displacement volumes (size³) work with diagonals from 1e-50 to 1e50: scale the mesh, "
-                       "or use the normal, vectors or transfer encoding");
+    throw InvalidInput(
+        std::string(where) + ": S's bounding-box diagonal is " + format_number(size) +
+        "; the displacement volumes (size³) work with diagonals from 1e-50 to 1e50: scale the mesh, "
+        "or use the normal, vectors or transfer encoding");
 
   encoded_ = false;  // stays so if anything below throws
   have_previous_ = false;

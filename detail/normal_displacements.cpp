@@ -281,7 +281,7 @@ void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Posi
       std::sort(votes.begin(), votes.end());
       std::vector<int> chosen(*std::max_element(piece.begin(), piece.end()) + 1, -1);
       for (size_t a = 0, b = 0, most = 0; a < votes.size(); a = b) {
-        while (b < votes.size() && votes[b] == votes[a]) ++b;       // one run of equal votes
+        while (b < votes.size() && votes[b] == votes[a]) ++b;          // one run of equal votes
         if (a == 0 || votes[a].first != votes[a - 1].first) most = 0;  // the first of a piece of S
         if (b - a > most) most = b - a, chosen[votes[a].first] = votes[a].second;
       }
@@ -302,9 +302,9 @@ void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Posi
           const bool restricted = !face_component.empty() && piece[i] >= 0;
           // B's vertex i bounds the distance where it lies on the piece searched.
           const bool bounds = i < nb && on_base[i] && (!restricted || base_piece[i] == piece[i]);
-          const ClosestPoint start = closest.query(
-              p, bounds ? (p - Bc.row(i)).norm() : std::numeric_limits<double>::infinity(),
-              restricted ? face_component.data() : nullptr, restricted ? piece[i] : -1);
+          const ClosestPoint start =
+              closest.query(p, bounds ? (p - Bc.row(i)).norm() : std::numeric_limits<double>::infinity(),
+                            restricted ? face_component.data() : nullptr, restricted ? piece[i] : -1);
           int f = start.face;
           Vec3 w = start.barycentric;
           ok[i] = search.run(p, f, w, iterations[i], walks[i]);

@@ -81,9 +81,12 @@ std::string collapsed_piece_warning(const Positions& S, const Positions& B, cons
     if (before[k] > 0 && after[k] < kMinBaseAreaRatio * before[k]) {
       const int v = static_cast<int>(std::find(piece.begin(), piece.end(), k) - piece.begin());
       char text[320];
-      std::snprintf(text, sizeof text, "decompose: the base lost the shape of one piece of the mesh (the piece of "
-                    "vertex %d: its base has %.3g of its area), so its details are its whole shape and fold or "
-                    "stretch under an edit; a smaller detail scale keeps it", v, after[k] / before[k]);
+      std::snprintf(
+          text, sizeof text,
+          "decompose: the base lost the shape of one piece of the mesh (the piece of "
+          "vertex %d: its base has %.3g of its area), so its details are its whole shape and fold or "
+          "stretch under an edit; a smaller detail scale keeps it",
+          v, after[k] / before[k]);
       return text;
     }
   return {};
@@ -194,9 +197,10 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
   report.area_ratio = free_area_ratio(S, d.base, F, region);
   report.warning = check_decomposition(report, o, S.rows());
   if (o.kind == DecompositionKind::LowPass && !report.low_pass.no_layer_reason.empty())
-    report.warning = "decompose: no separate detail layer (" + report.low_pass.no_layer_reason +
-                     "), so the base is the mesh itself and there are no details: an edit is the base method's alone" +
-                     (report.low_pass.all_boundary ? "" : "; --detail-scale sets a layer");
+    report.warning =
+        "decompose: no separate detail layer (" + report.low_pass.no_layer_reason +
+        "), so the base is the mesh itself and there are no details: an edit is the base method's alone" +
+        (report.low_pass.all_boundary ? "" : "; --detail-scale sets a layer");
   else if (report.warning.empty())
     report.warning = collapsed_piece_warning(S, d.base, F);
   if (o.kind == DecompositionKind::Remeshed)

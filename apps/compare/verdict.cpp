@@ -125,8 +125,10 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
       if (r.volume_change && !r.edit_scales) {
         const double v = std::abs(*r.volume_change);
         const std::string text = "volume changed by " + fmt("%+.2g", 100 * *r.volume_change) + " %";
-        if (v > t.poor_volume) poor.push_back(text);
-        else if (v > t.fair_volume) fair.push_back(text);
+        if (v > t.poor_volume)
+          poor.push_back(text);
+        else if (v > t.fair_volume)
+          fair.push_back(text);
       }
       if (r.rigidity.count == 0 && r.distortion.count == 0) {
         a.verdict = Verdict::NotJudged;

@@ -36,9 +36,10 @@ struct Assessment {
 
 //! One assessment per result (same order). Failed: the run threw (the reason is its message). Broken:
 //! self-intersecting triangle pairs or triangles folded over a multi-scale base. Poor / fair: rigidity or
-//! distortion beyond the thresholds, or a closed mesh's volume changed by an edit that does not scale. Good otherwise, but at most fair when the method warned (e.g. an
-//! iterative method that did not converge; the warning is part of the reason). Not judged: neither
-//! rigidity nor detail distortion could be measured (a point cloud), never the best.
+//! distortion beyond the thresholds, or a closed mesh's volume changed by an edit that does not scale. Good
+//! otherwise, but at most fair when the method warned (e.g. an iterative method that did not converge; the
+//! warning is part of the reason). Not judged: neither rigidity nor detail distortion could be measured (a
+//! point cloud), never the best.
 std::vector<Assessment> assess(const std::vector<MethodResult>& results, const VerdictThresholds& t = {});
 
 //! A few lines for the terminal: per edit, the best result and why, then the methods by verdict.

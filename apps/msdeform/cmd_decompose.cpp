@@ -84,10 +84,12 @@ void add_decompose_command(CLI::App& app) {
       default:
         if (report.low_pass.detail_scale > 0)
           std::printf("  base: low-pass at detail scale %.10g (%s; mean edge length %.4g)\n",
-                      report.low_pass.detail_scale, report.low_pass.automatic ? "chosen automatically" : "given",
+                      report.low_pass.detail_scale,
+                      report.low_pass.automatic ? "chosen automatically" : "given",
                       report.low_pass.mean_edge_length);
         else
-          std::printf("  base: the mesh itself, no separate detail layer: %s%s\n", report.low_pass.no_layer_reason.c_str(),
+          std::printf("  base: the mesh itself, no separate detail layer: %s%s\n",
+                      report.low_pass.no_layer_reason.c_str(),
                       report.low_pass.all_boundary ? "" : " (--detail-scale sets one)");
         for (const auto& k : report.low_pass.candidates) {
           std::printf("    tried %-10.4g", k.detail_scale);

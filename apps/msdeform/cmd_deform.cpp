@@ -158,7 +158,8 @@ void add_deform_command(CLI::App& app) {
         std::printf("  base: low-pass at detail scale %.4g (%s)\n", d.low_pass.detail_scale,
                     d.low_pass.automatic ? "chosen automatically; --detail-scale sets it" : "given");
       else if (low_pass)
-        std::printf("  base: the mesh itself, no separate detail layer (%s%s)\n", d.low_pass.no_layer_reason.c_str(),
+        std::printf("  base: the mesh itself, no separate detail layer (%s%s)\n",
+                    d.low_pass.no_layer_reason.c_str(),
                     d.low_pass.all_boundary ? "" : "; --detail-scale sets one");
       else if (d.kind == DecompositionKind::Fairing)
         std::printf("  base: faired free region\n");
@@ -214,10 +215,13 @@ void add_deform_command(CLI::App& app) {
       const bool reflection = rank == 3 && (A / sigma(0)).determinant() < 0;
       // A half turn (a .def can hold one; --rotate refuses it): which way round is not defined.
       if (const double turn = turn_degrees(A); rank == 3 && !reflection && turn > 179.9)
-        std::fprintf(stderr, "warning: the transform of handle %zu is a half turn (%.6g degrees): which way round "
-                     "the handle turns is not defined, so methods that blend or iterate rotations (propagate, "
-                     "gradient, arap, primo, and multi-scale over them) may turn the region either way; give "
-                     "less than 180 degrees\n", k, turn);
+        std::fprintf(
+            stderr,
+            "warning: the transform of handle %zu is a half turn (%.6g degrees): which way round "
+            "the handle turns is not defined, so methods that blend or iterate rotations (propagate, "
+            "gradient, arap, primo, and multi-scale over them) may turn the region either way; give "
+            "less than 180 degrees\n",
+            k, turn);
       if (rank == 3 && !reflection) continue;
       const char* what = reflection  ? "a reflection: it turns the handle inside out"
                          : rank == 2 ? "singular: it flattens the handle onto a plane"

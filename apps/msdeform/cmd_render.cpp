@@ -110,7 +110,8 @@ void add_render_command(CLI::App& app) {
     }
     // A stray vertex far away frames the picture, and the rest of the shape is a dot in it.
     if (const std::string w = extent_outlier_warning(c.P, c.F, "render"); !w.empty())
-      std::fprintf(stderr, "warning: %s; the picture frames every vertex, so the shape may be too small to see\n",
+      std::fprintf(stderr,
+                   "warning: %s; the picture frames every vertex, so the shape may be too small to see\n",
                    w.c_str());
     render_png(c.P, c.F, *output, o);
     edit->write_built(c.region, c.transforms);

@@ -196,7 +196,8 @@ bool turn_stays_below_half(const Mat4& from, const Mat4& to) {
   const int m = std::max(1, static_cast<int>(std::ceil(theta)));
   for (int i = 0; i <= m; ++i) {
     Mat4 at = Mat4::Identity();
-    at.topLeftCorner<3, 3>() = Eigen::AngleAxisd(turn.angle() * i / m, turn.axis()).toRotationMatrix() * start;
+    at.topLeftCorner<3, 3>() =
+        Eigen::AngleAxisd(turn.angle() * i / m, turn.axis()).toRotationMatrix() * start;
     if (!(turn_degrees(at) + theta / m < 180)) return false;
   }
   return true;
@@ -204,10 +205,12 @@ bool turn_stays_below_half(const Mat4& from, const Mat4& to) {
 
 std::string half_turn_message(int handle, const Mat4& start) {
   char text[400];
-  std::snprintf(text, sizeof text, "handle %d stops at %.0f degrees from rest: half a turn is as far as a handle "
-                "turns (its transform is a matrix, which keeps a rotation only up to whole turns, so a .def saved past "
-                "it would give the shape turned the other way round); turn it back, or reset", handle,
-                turn_degrees(start));
+  std::snprintf(
+      text, sizeof text,
+      "handle %d stops at %.0f degrees from rest: half a turn is as far as a handle "
+      "turns (its transform is a matrix, which keeps a rotation only up to whole turns, so a .def saved past "
+      "it would give the shape turned the other way round); turn it back, or reset",
+      handle, turn_degrees(start));
   return text;
 }
 

@@ -138,8 +138,9 @@ TEST_CASE("verdicts: a closed mesh that lost or gained volume under rigid handle
           "[compare][verdict]") {
   // The survey cylinder's 120° bend: the shell's result lost 51 % of the volume and its verdict named only
   // rigidity and detail change; ARAP lost 13 %.
-  std::vector<MethodResult> results = {result("cylinder", "arap", 0.01, 0.02), result("cylinder", "shell", 0.01, 0.02),
-                                       result("cylinder", "rbf", 0.01, 0.02), result("cylinder", "laplacian", 0.01, 0.02)};
+  std::vector<MethodResult> results = {
+      result("cylinder", "arap", 0.01, 0.02), result("cylinder", "shell", 0.01, 0.02),
+      result("cylinder", "rbf", 0.01, 0.02), result("cylinder", "laplacian", 0.01, 0.02)};
   results[0].volume_change = -0.128;
   results[1].volume_change = -0.5106;
   results[2].volume_change = -0.20;

@@ -146,7 +146,8 @@ TEST_CASE("a concave polygon is split into triangles that cover it once, a conve
   for (int shift = 0; shift < 5; ++shift) {
     std::string face = "f";
     for (int k = 0; k < 5; ++k) face += " " + std::to_string((shift + k) % 5 + 1);
-    std::ofstream(tmp.file("turned.obj")) << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 1 0.5 0\nv 0 2 0\n" << face << "\n";
+    std::ofstream(tmp.file("turned.obj")) << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 1 0.5 0\nv 0 2 0\n"
+                                          << face << "\n";
     INFO(face);
     check_cover(load_soup(tmp.file("turned.obj")), 2.5);
   }
@@ -154,15 +155,17 @@ TEST_CASE("a concave polygon is split into triangles that cover it once, a conve
                                       "8 3 4 5 6 7 0 1 2\n";
   check_cover(load_soup(tmp.file("l.off")), 3);
   // A convex polygon keeps the fan from its first corner (the faces every mesh tool reads).
-  std::ofstream(tmp.file("hexagon.off")) << "OFF\n6 1 0\n2 0 0\n1 1.7 0\n-1 1.7 0\n-2 0 0\n-1 -1.7 0\n1 -1.7 0\n"
-                                            "6 0 1 2 3 4 5\n";
+  std::ofstream(tmp.file("hexagon.off"))
+      << "OFF\n6 1 0\n2 0 0\n1 1.7 0\n-1 1.7 0\n-2 0 0\n-1 -1.7 0\n1 -1.7 0\n"
+         "6 0 1 2 3 4 5\n";
   LoadReport convex;
   const TriangleSoup hexagon = load_soup(tmp.file("hexagon.off"), &convex);
   REQUIRE(hexagon.F.rows() == 4);
   for (int k = 0; k < 4; ++k) CHECK(hexagon.F.row(k) == Eigen::RowVector3i(0, k + 1, k + 2));
   CHECK(convex.concave_polygons == 0);
   // A polygon that crosses itself (a bow tie) has no such split: refused, with its line and face.
-  for (const char* bowtie : {"0 0 0\n2 2 0\n2 0 0\n0 1 0\n", "0 0 0\n1 1 0\n1 0 0\n0 1 0\n"}) {  // lobes unequal, equal
+  for (const char* bowtie :
+       {"0 0 0\n2 2 0\n2 0 0\n0 1 0\n", "0 0 0\n1 1 0\n1 0 0\n0 1 0\n"}) {  // lobes unequal, equal
     std::ofstream(tmp.file("bowtie.off")) << "OFF\n4 1 0\n" << bowtie << "4 0 1 2 3\n";
     CHECK_THROWS_WITH(load_soup(tmp.file("bowtie.off")),
                       Contains("bowtie.off line 7: face 0 is a polygon of 4 corners that crosses itself"));
@@ -639,9 +642,10 @@ TEST_CASE("glued OFF headers, wrapped records, CR line ends and byte-order marks
                     Contains("file ends after 2 of 4 vertices") && Contains("line 3 has more than three numbers"));
   // A header counting two vertices too many: the first face lines were read as vertices, and the message
   // only said the file ended early in the faces.
-  CHECK_THROWS_WITH(load_soup(write("toomany.off", "OFF\n6 2 0\n" + vertices + faces + "\n")),
-                    Contains("file ends after 0 of 2 faces (vertices 0 to 3 have three numbers, vertex 4 on line 7 "
-                             "more: if the header's vertex count 6 is too large"));
+  CHECK_THROWS_WITH(
+      load_soup(write("toomany.off", "OFF\n6 2 0\n" + vertices + faces + "\n")),
+      Contains("file ends after 0 of 2 faces (vertices 0 to 3 have three numbers, vertex 4 on line 7 "
+               "more: if the header's vertex count 6 is too large"));
   CHECK_THROWS_WITH(load_soup(write("word.off", "OFFICE\n")), Contains("not OFF followed by counts"));
   // Bytes that are not text are shown as \xHH.
   CHECK_THROWS_WITH(load_soup(write("bad.obj", "v 0 0 0\n\x01\x02 1 2\n")), Contains("'\\x01\\x02'"));

@@ -60,10 +60,12 @@ TEST_CASE("low-pass base: a cylinder keeps its radius (fairing shrank it to a th
   CHECK(report.detail_scale == 0);
   const LowPassCandidate& last = report.candidates.back();
   if (last.area_ratio < 0.5 || last.check.fold_ratio_p999 > 0.5)
-    CHECK_THAT(report.no_layer_reason, Catch::Matchers::StartsWith("the candidate scale " + format_number(last.detail_scale) +
-                                                                   " already removes shape ("));
+    CHECK_THAT(report.no_layer_reason,
+               Catch::Matchers::StartsWith("the candidate scale " + format_number(last.detail_scale) +
+                                           " already removes shape ("));
   else
-    CHECK_THAT(report.no_layer_reason, Catch::Matchers::StartsWith("the detail heights grow with every scale tried"));
+    CHECK_THAT(report.no_layer_reason,
+               Catch::Matchers::StartsWith("the detail heights grow with every scale tried"));
   for (int v = 0; v < P.rows(); ++v) {
     if (P(v, 2) < 2 || P(v, 2) > 10) continue;  // the open ends may move a little
     CHECK(std::hypot(B(v, 0), B(v, 1)) == Approx(1).epsilon(0.02));
@@ -121,7 +123,8 @@ TEST_CASE("low-pass base: a mesh whose vertices all lie on its boundary is its o
       CHECK(low_pass_base(X, F, options, &report) == X);
       CHECK(report.detail_scale == 0);
       CHECK(report.all_boundary);
-      CHECK(report.no_layer_reason == "every vertex lies on the mesh boundary, which the low-pass keeps in place");
+      CHECK(report.no_layer_reason ==
+            "every vertex lies on the mesh boundary, which the low-pass keeps in place");
     }
 }
 

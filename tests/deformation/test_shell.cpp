@@ -94,7 +94,8 @@ TEST_CASE("shell: a solver failure caused by a stray vertex far away names the s
     shell.prepare(s.P, s.F, s.region);
     FAIL("prepare did not fail");
   } catch (const SolverError& e) {
-    CHECK_THAT(e.what(), Contains("singular") && Contains(". Note: shell: a few outlying vertices set the bounding box") &&
+    CHECK_THAT(e.what(), Contains("singular") &&
+                             Contains(". Note: shell: a few outlying vertices set the bounding box") &&
                              Contains("vertex " + std::to_string(stray) + " lies 1e+15 outside that box"));
   }
 }

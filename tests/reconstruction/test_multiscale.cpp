@@ -351,8 +351,10 @@ TEST_CASE("multiscale: a mesh with no interior vertex (a strip, a triangle) is t
   }
 }
 
-TEST_CASE("multiscale: a piece of the mesh whose base collapses, and a mesh without a detail layer, are warned about",
-          "[reconstruction][multiscale]") {
+TEST_CASE(
+    "multiscale: a piece of the mesh whose base collapses, and a mesh without a detail layer, are warned "
+    "about",
+    "[reconstruction][multiscale]") {
   // Break test: an icosahedron of radius 0.01 beside the bunny shrank to 0.00064 in the base at detail
   // scale 0.1 without a word (its details were its whole shape, and folded under transfer); and with no
   // detail layer the four multi-scale rows of compare equalled the shell's without saying why.

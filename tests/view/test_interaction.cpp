@@ -114,7 +114,8 @@ TEST_CASE("half a turn is as far as a handle turns: beyond it the .def it saves 
   // which `deform` turned the other way (0.108 of the diagonal apart).
   const auto about = [](double degrees, const Vec3& axis) {
     Mat4 T = Mat4::Identity();
-    T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(degrees * 3.14159265358979323846 / 180, axis.normalized()).toRotationMatrix();
+    T.topLeftCorner<3, 3>() =
+        Eigen::AngleAxisd(degrees * 3.14159265358979323846 / 180, axis.normalized()).toRotationMatrix();
     return T;
   };
   const Vec3 x = Vec3::UnitX(), tilted(1, 2, 0.5);
@@ -129,11 +130,12 @@ TEST_CASE("half a turn is as far as a handle turns: beyond it the .def it saves 
   CHECK_FALSE(turn_stays_below_half(about(100, x), about(200, x)));   // through the half turn
   CHECK_FALSE(turn_stays_below_half(about(170, x), about(-170, x)));  // 20° apart, but through 180°
   CHECK(turn_stays_below_half(about(170, x), about(90, x)));          // back the way it came
-  CHECK(turn_stays_below_half(about(170, x), about(-5, x)));  // the shorter way, -175°, through rest
+  CHECK(turn_stays_below_half(about(170, x), about(-5, x)));          // the shorter way, -175°, through rest
   // About another axis: from 150° about x, 60° about z goes no further than 150° + 60° allows, which is
   // checked along the way rather than at the end.
   CHECK(turn_stays_below_half(about(150, x), about(20, Vec3::UnitZ()) * about(150, x)));
-  CHECK(half_turn_message(2, about(175, x)).find("handle 2 stops at 175 degrees from rest") != std::string::npos);
+  CHECK(half_turn_message(2, about(175, x)).find("handle 2 stops at 175 degrees from rest") !=
+        std::string::npos);
 }
 
 TEST_CASE("selection: brush and lasso take the vertices on screen that the depth test shows", "[view]") {

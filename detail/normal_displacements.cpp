@@ -266,6 +266,7 @@ void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Posi
   // connectivity (remeshed) each piece of S goes to the piece of B nearest to most of its vertices.
   // face_component stays empty where B is one piece; piece[i] = -1: anywhere (a vertex no face uses).
   std::vector<int> face_component, piece;
+  std::vector<ClosestPoint> nearest;  // other connectivity: each vertex's closest point on all of B
   const std::vector<int> base_piece = vertex_components(Fb, nb);
   if (*std::max_element(base_piece.begin(), base_piece.end()) > 0) {
     face_component.resize(Fb.rows());
@@ -274,7 +275,7 @@ void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Posi
       piece = base_piece;
     } else {
       piece = vertex_components(Fs, static_cast<int>(ns));
-      const std::vector<ClosestPoint> nearest = closest.query_all(S);
+      nearest = closest.query_all(S);
       std::vector<std::pair<int, int>> votes;  // (piece of S, piece of B nearest to one of its vertices)
       for (long i = 0; i < ns; ++i)
         if (piece[i] >= 0) votes.emplace_back(piece[i], face_component[nearest[i].face]);
@@ -302,9 +303,13 @@ void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Posi
           const bool restricted = !face_component.empty() && piece[i] >= 0;
           // B's vertex i bounds the distance where it lies on the piece searched.
           const bool bounds = i < nb && on_base[i] && (!restricted || base_piece[i] == piece[i]);
+          // The vote's closest point where it lies on the piece searched: a search there finds it again.
+          const bool found = !nearest.empty() && (!restricted || face_component[nearest[i].face] == piece[i]);
           const ClosestPoint start =
-              closest.query(p, bounds ? (p - Bc.row(i)).norm() : std::numeric_limits<double>::infinity(),
-                            restricted ? face_component.data() : nullptr, restricted ? piece[i] : -1);
+              found ? nearest[i]
+                    : closest.query(p,
+                                    bounds ? (p - Bc.row(i)).norm() : std::numeric_limits<double>::infinity(),
+                                    restricted ? face_component.data() : nullptr, restricted ? piece[i] : -1);
           int f = start.face;
           Vec3 w = start.barycentric;
           ok[i] = search.run(p, f, w, iterations[i], walks[i]);

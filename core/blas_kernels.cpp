@@ -2,8 +2,12 @@
 
 #include <dlfcn.h>
 #include <strings.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <climits>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
@@ -15,6 +19,8 @@ char* openblas_get_corename(void) __attribute__((weak));
 void gotoblas_dynamic_init(void) __attribute__((weak));
 void gotoblas_dynamic_quit(void) __attribute__((weak));
 void dgemm_(void) __attribute__((weak));
+int openblas_get_num_threads(void) __attribute__((weak));
+void openblas_set_num_threads(int) __attribute__((weak));
 }
 
 namespace msd {
@@ -64,6 +70,51 @@ std::string select_blas_kernels() {
   }
 #endif
   return blas_kernels();
+}
+
+namespace {
+std::atomic<bool> blas_buffer_held{false};
+constexpr double kMB = 1 << 20;
+// One OpenBLAS work buffer (128 MB) with malloc's and the caller's margin.
+constexpr double kOneBufferMB = 160, kTwoThreadsMB = 512;
+}  // namespace
+
+BlasRoom blas_room() {
+  BlasRoom room;
+  rlimit limit;
+  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY || blas_kernels().empty()) return room;
+  unsigned long pages = 0;  // the process's address space now (the first field of statm)
+  if (FILE* statm = std::fopen("/proc/self/statm", "r")) {
+    if (std::fscanf(statm, "%lu", &pages) != 1) pages = 0;
+    std::fclose(statm);
+  }
+  room.limit_mb = static_cast<double>(limit.rlim_cur) / kMB;
+  room.left_mb = room.limit_mb - static_cast<double>(pages) * static_cast<double>(sysconf(_SC_PAGESIZE)) / kMB;
+  room.threads = room.left_mb >= kTwoThreadsMB ? 2 : room.left_mb >= kOneBufferMB || blas_buffer_held ? 1 : 0;
+  return room;
+}
+
+void blas_call_finished() { blas_buffer_held = true; }
+
+std::string no_room_for_blas_message(const BlasRoom& room, const char* who) {
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "%s: the address-space limit (ulimit -v) of %.0f MB leaves %.0f MB, and the factorisation's BLAS "
+                "(OpenBLAS) needs %.0f MB for its work buffer (it would wait for it forever): raise the limit to at "
+                "least %.0f MB",
+                who, room.limit_mb, room.left_mb, kOneBufferMB, room.limit_mb - room.left_mb + kOneBufferMB);
+  return text;
+}
+
+OneBlasThread::OneBlasThread() {
+  if (openblas_get_num_threads && openblas_set_num_threads && !blas_kernels().empty()) {
+    saved_ = openblas_get_num_threads();
+    if (saved_ > 1) openblas_set_num_threads(1);
+  }
+}
+
+OneBlasThread::~OneBlasThread() {
+  if (saved_ > 1) openblas_set_num_threads(saved_);
 }
 
 }  // namespace msd

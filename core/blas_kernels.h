@@ -28,4 +28,36 @@ std::string select_blas_kernels();
 //! is not OpenBLAS.
 std::string blas_kernels();
 
+//! How many threads may call BLAS at once within the process's address-space limit (RLIMIT_AS, ulimit -v).
+//! OpenBLAS (0.3.21) gives each thread that calls it, its own worker threads included, a work buffer
+//! (128 MB of address space on x86-64) and retries that allocation forever when it fails: under a tight
+//! limit the first BLAS call hangs. Measured: a shell prepare of the 10k lift hung below 700 MB.
+struct BlasRoom {
+  //! 2 without a limit (or with another BLAS), or with 512 MB or more left; 1 with room for one buffer,
+  //! or when an earlier call found its buffer (OpenBLAS keeps it for the next); 0: a call would hang.
+  int threads = 2;
+  double left_mb = 0;   //!< address space left under the limit, MB (0 without a limit)
+  double limit_mb = 0;  //!< the limit, MB (0: none)
+};
+BlasRoom blas_room();
+//! Tells blas_room() that a BLAS call on one thread finished (OpenBLAS then holds a buffer to reuse).
+void blas_call_finished();
+//! "the address-space limit (ulimit -v) of L MB leaves M MB ...": why `who` cannot call BLAS (room.threads
+//! 0), and what to change.
+std::string no_room_for_blas_message(const BlasRoom& room, const char* who);
+
+//! OpenBLAS on one thread for the lifetime of the object (its own threads would share themselves between
+//! several callers, spinning, and each needs a work buffer); restores the count on destruction. Does
+//! nothing with another BLAS.
+class OneBlasThread {
+ public:
+  OneBlasThread();
+  ~OneBlasThread();
+  OneBlasThread(const OneBlasThread&) = delete;
+  OneBlasThread& operator=(const OneBlasThread&) = delete;
+
+ private:
+  int saved_ = 0;
+};
+
 }  // namespace msd

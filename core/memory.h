@@ -15,6 +15,8 @@ std::uint64_t physical_memory();
 //! many times during a factorisation; with the default settings every one of them is page-faulted in
 //! anew. Measured on the 1M-vertex bi-Laplacian (2 cores): factorisation 9.7 s -> 6.2 s, assembly 2.0 s
 //! -> 1.1 s. The price: after a peak the process's resident size stays up to 1 GiB above what it uses.
+//! Does nothing under an address-space limit (ulimit -v): growing the heap by 256 MiB steps would fail
+//! where the limit leaves less, with mmap() turned off (measured: `msdeform --version` under 300 MB).
 //! Call once at program start (the msdeform tool and the benchmarks do); a library never calls it on its
 //! own (Python scripts may, with msdeform.retain_freed_memory()).
 void retain_freed_memory();

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstring>
 #include <numeric>
+#include <optional>
 #include <utility>
 
 #include "msdeform/core/blas_kernels.h"
@@ -147,10 +148,17 @@ struct SparseSPDSolver::Impl {
   void numeric(cholmod_sparse* S) {
     const auto t0 = std::chrono::steady_clock::now();
     common.status = CHOLMOD_OK;
+    // A supernodal factor calls BLAS, which must find room for its work buffers (blas_kernels.h).
+    const BlasRoom room = L->is_super ? blas_room() : BlasRoom();
+    if (room.threads == 0) {
+      cholmod_l_free_sparse(&S, &common);
+      release();
+      throw SolverError(no_room_for_blas_message(room, "SparseSPDSolver"));
+    }
     // On two threads where the factor is supernodal (supernodal_factorisation.h), by CHOLMOD otherwise.
     SupernodalFactorisationResult result;
     if (L->is_super && (L->xtype == CHOLMOD_REAL || cholmod_l_change_factor(CHOLMOD_REAL, true, true, true, true, L, &common)))
-      result = factorize_supernodal(S, L);
+      result = factorize_supernodal(S, L, room.threads);
     if (result.status == SupernodalFactorisationResult::kPatternMismatch) {
       cholmod_l_free_sparse(&S, &common);
       release();
@@ -160,8 +168,12 @@ struct SparseSPDSolver::Impl {
       common.status = CHOLMOD_NOT_POSDEF, L->minor = static_cast<size_t>(result.column);
     else if (result.status == SupernodalFactorisationResult::kOutOfMemory)
       common.status = CHOLMOD_OUT_OF_MEMORY;
-    else if (result.status == SupernodalFactorisationResult::kUnsupported && common.status >= CHOLMOD_OK)
+    else if (result.status == SupernodalFactorisationResult::kUnsupported && common.status >= CHOLMOD_OK) {
+      std::optional<OneBlasThread> one_blas_thread;
+      if (room.threads < 2) one_blas_thread.emplace();
       cholmod_l_factorize(S, L, &common);
+    }
+    if (L->is_super && common.status >= CHOLMOD_OK) blas_call_finished();
     numeric_seconds = seconds_since(t0);
     cholmod_l_free_sparse(&S, &common);
     if (common.status == CHOLMOD_NOT_POSDEF) {

@@ -1,22 +1,20 @@
 #include "msdeform/core/supernodal_factorisation.h"
 
 #include <cholmod.h>
-#include <sys/resource.h>
 #include <tbb/parallel_invoke.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <climits>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "msdeform/core/blas_kernels.h"
 #include "msdeform/core/supernodal_tree.h"
 
-// BLAS and LAPACK as CHOLMOD calls them (32-bit integers: Debian's OpenBLAS and reference BLAS), and
-// OpenBLAS's thread count (weak: null with another BLAS).
+// BLAS and LAPACK as CHOLMOD calls them (32-bit integers: Debian's OpenBLAS and reference BLAS).
 extern "C" {
 void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha, const double* a,
             const int* lda, const double* beta, double* c, const int* ldc);
@@ -26,8 +24,6 @@ void dgemm_(const char* transa, const char* transb, const int* m, const int* n, 
 void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m, const int* n,
             const double* alpha, const double* a, const int* lda, double* b, const int* ldb);
 void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info);
-int openblas_get_num_threads(void) __attribute__((weak));
-void openblas_set_num_threads(int) __attribute__((weak));
 }
 
 namespace msd {
@@ -78,42 +74,6 @@ PermutedLower permute(const cholmod_sparse* A, const std::vector<Int>& pinv) {
   return C;
 }
 
-// OpenBLAS on one thread while two threads call it (it would share its own threads between them, spinning);
-// restores the count on destruction.
-class OneBlasThread {
- public:
-  OneBlasThread() {
-    if (openblas_get_num_threads && openblas_set_num_threads && !blas_kernels().empty()) {
-      saved_ = openblas_get_num_threads();
-      if (saved_ > 1) openblas_set_num_threads(1);
-    }
-  }
-  ~OneBlasThread() {
-    if (saved_ > 1) openblas_set_num_threads(saved_);
-  }
-  OneBlasThread(const OneBlasThread&) = delete;
-  OneBlasThread& operator=(const OneBlasThread&) = delete;
-
- private:
-  int saved_ = 0;
-};
-
-// OpenBLAS (0.3.21) gives each thread that calls it a work buffer on its first call (128 MB of address
-// space on x86-64) and retries that allocation forever when it fails. Under an address-space limit
-// (ulimit -v) without room for a second buffer, the second thread would hang where one thread finishes:
-// measured, a shell prepare of CGAL's armadillo hung at 600–700 MB and finished on one thread.
-bool room_for_a_second_blas_thread() {
-  rlimit limit;
-  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return true;
-  unsigned long pages = 0;  // the process's address space now (the first field of statm)
-  if (FILE* statm = std::fopen("/proc/self/statm", "r")) {
-    if (std::fscanf(statm, "%lu", &pages) != 1) pages = 0;
-    std::fclose(statm);
-  }
-  const double used = static_cast<double>(pages) * static_cast<double>(sysconf(_SC_PAGESIZE));
-  return used + 512.0 * (1 << 20) < static_cast<double>(limit.rlim_cur);
-}
-
 class Factorisation {
  public:
   Factorisation(const cholmod_sparse* A, cholmod_factor* L)
@@ -137,7 +97,7 @@ class Factorisation {
 
   // Factors L: the two groups in parallel, each summing its updates to the supernodes above the split
   // (group 0's in L, group 1's in a buffer laid out alike), then those supernodes.
-  SupernodalFactorisationResult run() {
+  SupernodalFactorisationResult run(int blas_threads) {
     SupernodalFactorisationResult result;
     const std::vector<int> group = split();
     if (group.empty()) return result;  // not postordered: kUnsupported
@@ -150,7 +110,9 @@ class Factorisation {
     std::unique_ptr<double[]> buffer(new double[std::max<long>(buffer_size, 1)]);
     allocate(work_[0], order[0]);
     allocate(work_[1], order[1]);
-    if (room_for_a_second_blas_thread()) {
+    std::optional<OneBlasThread> one_blas_thread;  // all along where BLAS has room for one thread only
+    if (blas_threads < 2) one_blas_thread.emplace();
+    if (blas_threads >= 2) {
       OneBlasThread one_thread;
       tbb::parallel_invoke([&] { factor_group(0, order[0], order[2], x_, in_l); },
                            [&] { factor_group(1, order[1], order[2], buffer.get(), in_buffer); });
@@ -349,14 +311,14 @@ class Factorisation {
 
 }  // namespace
 
-SupernodalFactorisationResult factorize_supernodal(const cholmod_sparse* A, cholmod_factor* L) {
+SupernodalFactorisationResult factorize_supernodal(const cholmod_sparse* A, cholmod_factor* L, int blas_threads) {
   SupernodalFactorisationResult result;
   if (!A || !L || !L->is_super || !L->is_ll || L->xtype != CHOLMOD_REAL || L->itype != CHOLMOD_LONG || !L->x ||
       L->n == 0 || L->n > static_cast<size_t>(INT_MAX) || A->itype != CHOLMOD_LONG || A->xtype != CHOLMOD_REAL ||
       A->dtype != CHOLMOD_DOUBLE || A->stype >= 0 || A->nrow != L->n || A->ncol != L->n)
     return result;
   try {
-    const SupernodalFactorisationResult done = Factorisation(A, L).run();
+    const SupernodalFactorisationResult done = Factorisation(A, L).run(blas_threads);
     if (done.status == SupernodalFactorisationResult::kDone) L->minor = L->n;
     return done;
   } catch (const std::bad_alloc&) {

@@ -29,10 +29,11 @@ struct SupernodalFactorisationResult {
 //! A outside L's pattern (CHOLMOD's own factorisation drops such entries silently); kNotPositiveDefinite
 //! with the first failing column found (after either, L's values are of no use); kOutOfMemory when the
 //! workspace does not fit (4 n indices, the permuted A, three update blocks of L->maxcsize entries and the
-//! values of the supernodes above the split once more). Calls BLAS from two threads; with OpenBLAS it runs
-//! OpenBLAS on one thread meanwhile (a process-wide setting, restored after). Under an address-space
-//! limit (RLIMIT_AS) with less than 512 MB left it runs on the calling thread alone: OpenBLAS hangs when it
-//! cannot map a second thread's buffer.
-SupernodalFactorisationResult factorize_supernodal(const cholmod_sparse_struct* A, cholmod_factor_struct* L);
+//! values of the supernodes above the split once more). With blas_threads 2 it calls BLAS from two threads,
+//! with OpenBLAS on one thread meanwhile (a process-wide setting, restored after), and lets OpenBLAS use
+//! its threads for the supernodes above the split; with 1 (blas_room() found room for one OpenBLAS work
+//! buffer only) everything runs on the calling thread, OpenBLAS on one thread.
+SupernodalFactorisationResult factorize_supernodal(const cholmod_sparse_struct* A, cholmod_factor_struct* L,
+                                                   int blas_threads = 2);
 
 }  // namespace msd

@@ -1,10 +1,14 @@
 // msdeform: command-line front end of the msdeform library.
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <string>
 #include <string_view>
+#include <system_error>
 
 #include "apps/msdeform/commands.h"
 #include "msdeform/core/blas_kernels.h"
@@ -42,6 +46,28 @@ void add_common_checks(CLI::App& app) {
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) add_common_checks(*sub);
 }
 
+// OpenBLAS starts its worker thread as it loads, and the worker takes its 128 MB work buffer at once,
+// retrying forever where an address-space limit (ulimit -v) leaves no room: the process then spins on a
+// core and hangs at exit (measured: `msdeform --version` under 300 MB). Under any limit the tool runs
+// itself again, once, with OPENBLAS_NUM_THREADS=1 (no worker); the factorisation asks for the room its
+// own BLAS calls need (blas_room()). Returns where exec fails or is not needed.
+void rerun_without_blas_worker_under_a_limit(char** argv) {
+  rlimit limit;
+  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY || std::getenv("OPENBLAS_NUM_THREADS") ||
+      msd::blas_kernels().empty())
+    return;
+  setenv("OPENBLAS_NUM_THREADS", "1", 1);
+  execv("/proc/self/exe", argv);
+  unsetenv("OPENBLAS_NUM_THREADS");
+}
+
+// A thread that could not start (TBB's "pthread_create has failed", std::system_error from std::thread):
+// the process ran out of address space or of processes, not a fault of the program.
+bool thread_start_failed(const std::exception& e) {
+  return std::string_view(e.what()).find("pthread_create") != std::string_view::npos ||
+         dynamic_cast<const std::system_error*>(&e) != nullptr;
+}
+
 }  // namespace
 
 std::optional<double> msd::cli::decimal_number(const std::string& text) {
@@ -54,6 +80,7 @@ std::optional<double> msd::cli::decimal_number(const std::string& text) {
 }
 
 int main(int argc, char** argv) {
+  rerun_without_blas_worker_under_a_limit(argv);
   msd::retain_freed_memory();
   msd::select_blas_kernels();  // before any thread uses BLAS (core/blas_kernels.h)
   CLI::App app{"msdeform: multi-scale, detail-preserving deformation of triangle meshes"};
@@ -112,6 +139,11 @@ int main(int argc, char** argv) {
     std::cerr << "msdeform: error: " << e.path1().string() << ": " << e.code().message() << "\n";
     return 1;
   } catch (const std::exception& e) {
+    if (thread_start_failed(e)) {
+      std::cerr << "msdeform: error: a worker thread could not start (" << e.what()
+                << "): raise the address-space limit (ulimit -v) or the process limit (ulimit -u)\n";
+      return 1;
+    }
     std::cerr << "msdeform: internal error: " << e.what() << " (please report it with the command line)\n";
     return 70;  // EX_SOFTWARE
   }

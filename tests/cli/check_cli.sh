@@ -223,4 +223,17 @@ for rank in "plane:1 0 0 0\n0 1 0 0\n0 0 0 0.1\n0 0 0 1" "line:1 0 0 0\n0 0 0 0\
     half) grep -q "transform of handle 0 is a half turn (180 degrees): which way round" err.txt ;;
   esac || { cat err.txt; fail "the warning for a transform of rank ${rank%%:*}"; }
 done
+# Under an address-space limit (ulimit -v) OpenBLAS's worker retried its 128 MB buffer forever: every run
+# hung, `--version` at exit, a prepare in its factorisation (300–700 MB, the 10k lift). Now each finishes
+# or says what limit it needs. (Not under AddressSanitizer, whose shadow memory needs no limit.)
+if ! ldd "$msdeform" | grep -q libasan; then
+  for limit in 150000 250000 350000 600000; do
+    (ulimit -v $limit && timeout 60 "$msdeform" --version >/dev/null) || fail "--version under ulimit -v $limit"
+    (ulimit -v $limit && timeout 120 "$msdeform" deform --scene lift --resolution 10k --method shell -o limited.off \
+      >/dev/null 2>err.txt)
+    got=$?
+    [ $got = 0 ] || { [ $got = 1 ] && grep -q "raise the limit to at least" err.txt; } ||
+      { cat err.txt; fail "deform under ulimit -v $limit exited $got"; }
+  done
+fi
 echo "check_cli: passed"

@@ -120,8 +120,10 @@ struct DetailDistortion {
 class DetailDistortionMetric {
  public:
   //! rest: #V by 3 with faces F (#F by 3); region as for the edit (its free vertices are faired).
-  //! \throw InvalidInput for a region of another size or without free vertices, or a rest mesh of zero
-  //! extent; otherwise as fair_region() and NormalDisplacements::encode().
+  //! \throw InvalidInput for a region of another size or without free vertices, a rest mesh of zero
+  //! extent, or a faired base B0 that lost the shape (less than kMinBaseAreaRatio of the rest's area on
+  //! the triangles with a free vertex, as decompose() refuses it: a large or tube-like free region);
+  //! otherwise as fair_region() and NormalDisplacements::encode().
   DetailDistortionMetric(const Positions& rest, const Faces& F, const Region& region,
                          const FairingOptions& fairing = {});
   //! The distortion of deformed (S', #V by 3). \throw InvalidInput for another row count; otherwise as
@@ -142,8 +144,7 @@ class DetailDistortionMetric {
 
 //! Detail distortion of deformed (S') against rest (S), both #V by 3 with faces F; region as for the
 //! edit (its free vertices are faired): one-shot DetailDistortionMetric. \throw InvalidInput for
-//! differing sizes or a region without free vertices; otherwise as fair_region() and
-//! NormalDisplacements::encode().
+//! differing sizes, or as DetailDistortionMetric's constructor and measure().
 DetailDistortion detail_distortion(const Positions& rest, const Positions& deformed, const Faces& F,
                                    const Region& region, const FairingOptions& fairing = {});
 

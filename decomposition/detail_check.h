@@ -10,6 +10,12 @@
 
 namespace msd {
 
+//! A base B with less than this fraction of S's area on the triangles with a free vertex
+//! (free_area_ratio) has lost the shape, not only the details: heights over it are the shape itself (a
+//! tube faired towards its axis). decompose() refuses such a base; the detail distortion metric does not
+//! measure over one.
+constexpr double kMinBaseAreaRatio = 0.5;
+
 //! Details D = S − B measured against the curvature of B. S and B share connectivity F.
 //!
 //! Per vertex i of B: unit area-weighted normal n_i, signed height h_i = (s_i − b_i)·n_i, and for each

@@ -20,9 +20,6 @@ namespace {
 constexpr DecompositionKind kKinds[] = {DecompositionKind::LowPass, DecompositionKind::Fairing,
                                         DecompositionKind::Remeshed, DecompositionKind::Subdivision};
 
-// A base with less than this fraction of S's area around the free region has lost the shape.
-constexpr double kMinBaseAreaRatio = 0.5;
-
 // What to change when the decomposition is refused or warned about.
 std::string remedy(const DecompositionReport& r) {
   if (r.kind == DecompositionKind::Fairing)

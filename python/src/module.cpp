@@ -656,8 +656,9 @@ at 0) or 'uniform'. Raises ValueError for mismatched shapes or indices.)doc");
       R"doc(Change of the details (seed 9.3): the free region of rest and of deformed is faired (thin plate)
 and the normal-displacement heights over the two bases are compared. Returns a DetailDistortion
 (per_vertex |h1 - h0| in mesh units, stats relative to the largest rest height). rest, deformed:
-(#V, 3); F (#F, 3); labels (#V,) codes with free vertices. Raises ValueError for mismatched shapes or a
-region without free vertices; msdeform.SolverError if a fairing fails.)doc");
+(#V, 3); F (#F, 3); labels (#V,) codes with free vertices. Raises ValueError for mismatched shapes, a
+region without free vertices, or a free region that fairing shrinks (its faired base keeps less than half
+of its area: a long tube free between its ends); msdeform.SolverError if a fairing fails.)doc");
   m.def(
       "volume",
       [](PositionsArg V, FacesArg F) {

@@ -52,9 +52,17 @@ void LaplacianEditing::check_scale(const Positions& out) {
                            : "the edit stretches the free region"));
 }
 
-void LaplacianEditing::prepare_implicit(const Positions& P, const Faces& F, const Region&) {
+void LaplacianEditing::prepare_implicit(const Positions& P, const Faces& F, const Region& region) {
   const int nv = static_cast<int>(P.rows());
   const LaplaceOperator lap = cotan_laplacian(P, F);
+  // A free vertex without area has no residual rows of its own, yet its neighbours' ring fits still reach it:
+  // R^T R is then not singular, only nearly, it factors, and the vertex lands anywhere (measured: CGAL's
+  // cow with one one-ring collapsed to a point moved a vertex 7.9 units under a 0.1 translation).
+  for (int v : region.free_vertices())
+    if (!(lap.mass[v] > 0))
+      throw SolverError("laplacian: the least-squares system is singular near vertex " + std::to_string(v) +
+                            " (a free vertex whose faces all have zero area: repair the mesh there)",
+                        v);
   check_neighbour_coupling(lap.W, 3, "laplacian: the least-squares system R^T R (x, y and z coupled)");
   delta_ = rest_laplace_coordinates(lap, P);
   const VertexAdjacency rings = vertex_adjacency(F, nv);

@@ -1,6 +1,5 @@
 #include <catch2/catch.hpp>
 
-
 #include <string>
 
 #include "msdeform/core/adjacency.h"

@@ -2,14 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <Eigen/SVD>
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/extent.h"
 #include "msdeform/core/mesh.h"
+#include "msdeform/core/rotation.h"
 #include "msdeform/core/surface_check.h"
 
 namespace msd {
@@ -55,6 +59,36 @@ void check_affine(const std::vector<Mat4>& transforms, const std::string& who) {
       throw InvalidInput(who + ": transform of handle " + std::to_string(k) + " has an entry of " +
                          format_number(transforms[k].cwiseAbs().maxCoeff()) +
                          "; msdeform works with sizes up to 1e70");
+  }
+}
+
+void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::string& who,
+                               std::vector<std::string>& warnings) {
+  for (size_t k = 0; k < transforms.size(); ++k) {
+    // The numerical rank (singular values above 1e-12 of the largest) decides: below 3 the map keeps as
+    // many dimensions of the handle (a plane, a line, a point); at 3 a negative determinant (of A over its
+    // largest singular value, which neither underflows nor overflows) is a reflection.
+    const Mat3 A = transforms[k].topLeftCorner<3, 3>();
+    const Vec3 sigma = Eigen::JacobiSVD<Mat3>(A).singularValues();
+    const int rank = static_cast<int>((sigma.array() > 1e-12 * sigma(0)).count());
+    const bool reflection = rank == 3 && (A / sigma(0)).determinant() < 0;
+    char text[400];
+    if (const double turn = rank == 3 && !reflection ? turn_degrees(A) : 0; turn > 179.9) {
+      std::snprintf(text, sizeof text,
+                    "%s%s%zu is a half turn (%.6g degrees): which way round the handle turns is not defined, so "
+                    "methods that blend or iterate rotations (propagate, gradient, arap, primo, and multi-scale "
+                    "over them) may turn the region either way; give less than 180 degrees",
+                    who.c_str(), kHandleTransformWarning, k, turn);
+      warnings.emplace_back(text);
+    }
+    if (rank == 3 && !reflection) continue;
+    const char* what = reflection  ? "a reflection: it turns the handle inside out"
+                       : rank == 2 ? "singular: it flattens the handle onto a plane"
+                       : rank == 1 ? "singular: it collapses the handle onto a line"
+                                   : "singular: it collapses the handle to a point";
+    std::snprintf(text, sizeof text, "%s%s%zu is %s (singular values %.3g, %.3g, %.3g)", who.c_str(),
+                  kHandleTransformWarning, k, what, sigma(0), sigma(1), sigma(2));
+    warnings.emplace_back(text);
   }
 }
 
@@ -153,6 +187,7 @@ void Deformer::deform(const std::vector<Mat4>& transforms, Positions& out) {
   begin_frame(out);
   check_affine(transforms, name());
   do_deform(transforms, out);
+  handle_transform_warnings(transforms, name(), frame_report_.warnings);
   end_frame(out);
 }
 

@@ -86,7 +86,9 @@ class Deformer {
   void prepare(const Mesh& mesh, const Region& region);
 
   //! One frame: transforms[k] moves handle k (4x4 affine). Writes #V by 3 positions into out (resized
-  //! only when its shape differs). \throw UsageError before prepare or for a wrong transform count;
+  //! only when its shape differs). A transform that is singular (it flattens or collapses its handle), a
+  //! reflection, or a half turn (which way round is not defined) is warned about in the frame report
+  //! (handle_transform_warnings()). \throw UsageError before prepare or for a wrong transform count;
   //! InvalidInput for a non-finite or non-affine matrix; SolverError naming the vertex if the result has
   //! a non-finite coordinate.
   void deform(const std::vector<Mat4>& transforms, Positions& out);
@@ -195,6 +197,15 @@ class LocalFrameDeformer : public Deformer {
 constexpr const char* kTornEdgesWarning = "vertices placed by different transforms";
 //! In the frame warning of a method that stopped before its tolerance (Deformer::end_frame).
 constexpr const char* kNotConvergedWarning = ": stopped after ";
+
+//! In the frame warning about a handle transform that is singular, a reflection or a half turn.
+constexpr const char* kHandleTransformWarning = ": the transform of handle ";
+//! Appends to `warnings` one line per transform (finite, affine) that is singular (numerical rank below 3:
+//! the handle flattened onto a plane, a line or a point), a reflection (negative determinant: the handle
+//! turned inside out) or a half turn (180°: methods that blend or iterate rotations may turn it either
+//! way); `who` prefixes each. Allocates only for a warning.
+void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::string& who,
+                               std::vector<std::string>& warnings);
 
 //! Throws InvalidInput unless every transform is finite with last row (0 0 0 1); `who` prefixes the message.
 void check_affine(const std::vector<Mat4>& transforms, const std::string& who);

@@ -138,9 +138,11 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
     r.residual = std::max(r.residual, encoding_->last_residual());
     r.converged = r.converged && encoding_->last_converged();
   }
-  for (const std::string& w :
-       base.warnings)  // a non-convergence is said once, for the whole frame (end_frame)
-    if (w.rfind(base_deformer_->name() + kNotConvergedWarning, 0) != 0) r.warnings.push_back(w);
+  // A non-convergence is said once, for the whole frame (end_frame), and so are the transforms (deform()).
+  for (const std::string& w : base.warnings)
+    if (w.rfind(base_deformer_->name() + kNotConvergedWarning, 0) != 0 &&
+        w.rfind(base_deformer_->name() + kHandleTransformWarning, 0) != 0)
+      r.warnings.push_back(w);
   r.folded_faces = fold_check_.count(out, base_deformed_, transforms);
   if (r.folded_faces > 0)
     r.warnings.push_back(

@@ -12,7 +12,6 @@
 #include "msdeform/analysis/metrics.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/mesh_io.h"
-#include "msdeform/core/rotation.h"
 #include "msdeform/deformation/space_deformer.h"
 #include "msdeform/reconstruction/multiscale.h"
 
@@ -205,31 +204,6 @@ void add_deform_command(CLI::App& app) {
                    deformer->name() == "arap" ? "; more ARAP iterations or a larger fixed region may help"
                                               : "; arap keeps the proportions best");
     if (report.folded_faces > 0) std::fprintf(stderr, "advice: %s\n", fold_advice(*deformer).c_str());
-    for (size_t k = 0; k < c.transforms.size(); ++k) {
-      // The numerical rank (singular values above 1e-12 of the largest) decides: below 3 the map keeps as
-      // many dimensions of the handle (a plane, a line, a point); at 3 a negative determinant (of A over its
-      // largest singular value, which neither underflows nor overflows) is a reflection.
-      const Mat3 A = c.transforms[k].topLeftCorner<3, 3>();
-      const Vec3 sigma = Eigen::JacobiSVD<Mat3>(A).singularValues();
-      const int rank = static_cast<int>((sigma.array() > 1e-12 * sigma(0)).count());
-      const bool reflection = rank == 3 && (A / sigma(0)).determinant() < 0;
-      // A half turn (a .def can hold one; --rotate refuses it): which way round is not defined.
-      if (const double turn = turn_degrees(A); rank == 3 && !reflection && turn > 179.9)
-        std::fprintf(
-            stderr,
-            "warning: the transform of handle %zu is a half turn (%.6g degrees): which way round "
-            "the handle turns is not defined, so methods that blend or iterate rotations (propagate, "
-            "gradient, arap, primo, and multi-scale over them) may turn the region either way; give "
-            "less than 180 degrees\n",
-            k, turn);
-      if (rank == 3 && !reflection) continue;
-      const char* what = reflection  ? "a reflection: it turns the handle inside out"
-                         : rank == 2 ? "singular: it flattens the handle onto a plane"
-                         : rank == 1 ? "singular: it collapses the handle onto a line"
-                                     : "singular: it collapses the handle to a point";
-      std::fprintf(stderr, "warning: the transform of handle %zu is %s (singular values %.3g, %.3g, %.3g)\n",
-                   k, what, sigma(0), sigma(1), sigma(2));
-    }
     std::printf("  wrote %s\n", output->c_str());
   });
 }

@@ -452,3 +452,13 @@ def test_retain_freed_memory_serves_large_arrays_from_the_heap(lift):
     shell = msdeform.Deformer("shell")
     shell.prepare(V, F, labels)
     assert np.isfinite(shell.deform(transforms)).all()
+
+
+def test_a_mirrored_or_collapsed_handle_is_warned_about(prepared):
+    # The checks lived in the msdeform tool only: a Python frame mirrored or collapsed a handle in silence.
+    d = prepared("shell")
+    for matrix, said in [(np.diag([-1.0, 1, 1, 1]), "is a reflection: it turns the handle inside out"),
+                         (np.diag([0.0, 0, 0, 1]), "is singular: it collapses the handle to a point")]:
+        with pytest.warns(msdeform.MsdeformWarning, match=said):
+            d.deform([matrix])
+        assert any(said in w for w in d.frame_report.warnings)

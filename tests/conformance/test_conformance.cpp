@@ -51,6 +51,7 @@ namespace msd {
 namespace {
 
 using Catch::Matchers::Contains;
+using Catch::Matchers::StartsWith;
 
 // The catalogue under test: the built-in rows plus one row per fixture.
 const Catalogue& catalogue() {
@@ -342,6 +343,45 @@ TEST_CASE(
     CHECK(d.num_handles() == 0);
     CHECK(d.num_vertices() == 0);
     CHECK_THROWS_WITH(d.deform(s.transforms), Contains("the last prepare() failed"));
+  });
+}
+
+TEST_CASE("conformance: every method warns once about a singular, reflecting or half-turn handle transform",
+          "[conformance]") {
+  // These checks lived in the msdeform tool only: Python frames mirrored or collapsed a handle in silence.
+  const Scene& s = test::bent_bar();
+  Mat4 half = Mat4::Identity(), turn = Mat4::Identity();
+  half.topLeftCorner<3, 3>() = Eigen::AngleAxisd(M_PI, Vec3(0, 0, 1)).toRotationMatrix();
+  turn.topLeftCorner<3, 3>() = Eigen::AngleAxisd(2.5, Vec3(0, 0, 1)).toRotationMatrix();
+  const std::vector<std::pair<Mat4, const char*>> cases = {
+      {Mat4(Eigen::Vector4d(-1, 1, 1, 1).asDiagonal()), "is a reflection: it turns the handle inside out"},
+      {Mat4(Eigen::Vector4d(1, 1, 0, 1).asDiagonal()), "is singular: it flattens the handle onto a plane"},
+      {Mat4(Eigen::Vector4d(0, 0, 0, 1).asDiagonal()), "is singular: it collapses the handle to a point"},
+      {half, "is a half turn (180 degrees): which way round the handle turns is not defined"},
+      {turn, nullptr}};
+  for_every_method([&](Deformer& d) {
+    if (d.name() == "primo") return;  // minutes per frame; its frames go through the same Deformer::deform
+    d.prepare(s.P, s.F, s.region);
+    for (const auto& [T, said] : cases) {
+      INFO(T);
+      d.reset();
+      try {
+        d.deform({T});
+      } catch (const Error& e) {  // a method may refuse a degenerate frame outright
+        INFO(e.what());
+        CHECK(said != nullptr);
+        continue;
+      }
+      std::vector<std::string> about;
+      for (const std::string& w : d.frame_report().warnings)
+        if (w.find(kHandleTransformWarning) != std::string::npos) about.push_back(w);
+      if (!said) {
+        CHECK(about.empty());
+        continue;
+      }
+      REQUIRE(about.size() == 1);
+      CHECK_THAT(about[0], StartsWith(d.name() + ": the transform of handle 0 ") && Contains(said));
+    }
   });
 }
 

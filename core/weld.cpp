@@ -81,10 +81,8 @@ std::vector<std::uint64_t> boundary_edges(const Faces& F) {
   return out;
 }
 
-}  // namespace
-
-int count_seam_vertices(const Positions& P, const Faces& F, double eps) {
-  check(P, F, eps, "count_seam_vertices");
+// Per vertex: 1 on an open seam (count_seam_vertices).
+std::vector<char> seam_vertices(const Positions& P, const Faces& F, double eps) {
   const std::vector<std::uint64_t> edges = boundary_edges(F);
   const auto first = [](std::uint64_t e) { return static_cast<int>(e >> 32); };
   const auto second = [](std::uint64_t e) { return static_cast<int>(e & 0xffffffffu); };
@@ -107,15 +105,26 @@ int count_seam_vertices(const Positions& P, const Faces& F, double eps) {
     if (coinciding[edge_key(groups.find(first(e)), groups.find(second(e)))] > 1)
       for (const int v : {first(e), second(e)})
         if (size[groups.find(v)] > 1) seam[v] = 1;
+  return seam;
+}
+
+}  // namespace
+
+int count_seam_vertices(const Positions& P, const Faces& F, double eps) {
+  check(P, F, eps, "count_seam_vertices");
+  const std::vector<char> seam = seam_vertices(P, F, eps);
   return static_cast<int>(std::count(seam.begin(), seam.end(), 1));
 }
 
 Weld weld_vertices(const Positions& P, const Faces& F, double eps) {
   check(P, F, eps, "weld_vertices");
-  std::vector<int> all(static_cast<size_t>(P.rows()));
+  std::vector<int> all(static_cast<size_t>(P.rows())), seams;
   std::iota(all.begin(), all.end(), 0);
+  const std::vector<char> seam = seam_vertices(P, F, eps);
+  for (int v : all)
+    if (seam[v]) seams.push_back(v);
   DisjointSets groups(static_cast<int>(P.rows()));
-  join_close(P, all, eps, groups);
+  join_close(P, seams, eps, groups);
   Weld w;
   w.welded_of.assign(all.size(), -1);
   int n = 0;

@@ -17,7 +17,7 @@ namespace msd {
 //! \throw InvalidInput for a negative or non-finite eps, or a face index outside [0, #V).
 int count_seam_vertices(const Positions& P, const Faces& F, double eps = 0);
 
-//! A mesh with vertices within a distance merged (Blender's "merge by distance"), and the way back.
+//! A mesh with its seam vertices within a distance merged, and the way back.
 struct Weld {
   //! #V: each original vertex's vertex in the welded mesh. Vertices chained within eps are one group; a
   //! group's welded vertex sits at its lowest-numbered member, and groups are numbered in that order.
@@ -37,7 +37,10 @@ struct Weld {
   std::string in_file_numbering(const std::string& message) const;
 };
 
-//! Merges vertices within eps of each other (eps in mesh units; 0: identical coordinates only).
+//! Merges the vertices of open seams (count_seam_vertices) within eps of each other (eps in mesh units; 0:
+//! identical coordinates only). Other vertices within eps stay apart, as interior twins (CGAL's cow has
+//! one pair) and holes touching at a point: merging them would pinch the surface into a non-manifold
+//! vertex.
 //! \throw InvalidInput for a negative or non-finite eps, or a face index outside [0, #V).
 Weld weld_vertices(const Positions& P, const Faces& F, double eps);
 

@@ -76,18 +76,34 @@ TEST_CASE("weld: a plane split along a seam is counted, welded for the method an
 }
 
 TEST_CASE("weld: messages about the welded mesh name the file's vertices", "[core][weld]") {
-  // File vertex 1 repeats vertex 0, so welded vertices 0, 1, 2 are the file's 0, 2, 3 (--weld named the
-  // welded numbers before, which point at other vertices of the file).
-  Positions P(4, 3);
-  P << 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0;
-  Faces F(1, 3);
-  F << 1, 2, 3;
+  // Two triangles split along a seam: file vertices 1 and 4 repeat 0 and 2, so welded vertices 0, 1, 2, 3
+  // are the file's 0, 2, 3, 5 (--weld named the welded numbers before, which point at other vertices of the
+  // file).
+  Positions P(6, 3);
+  P << 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 0, 0, 0, -1, 0;
+  Faces F(2, 3);
+  F << 0, 2, 3, 4, 1, 5;
   const Weld w = weld_vertices(P, F, 0);
-  REQUIRE(w.P.rows() == 3);
+  REQUIRE(w.P.rows() == 4);
+  CHECK(w.welded_of == std::vector<int>{0, 0, 1, 2, 1, 3});
   CHECK(w.file_vertex(2) == 3);
   CHECK(w.in_file_numbering("shell: singular near vertex 2; vertices 0, 1, 2 moved; vertex 7 and 12 vertices") ==
         "shell: singular near vertex 3; vertices 0, 2, 3 moved; vertex 7 and 12 vertices");
-  CHECK_THROWS_AS(w.file_vertex(3), InvalidInput);
+  CHECK_THROWS_AS(w.file_vertex(4), InvalidInput);
+}
+
+TEST_CASE("weld: only seams are welded; twins inside the surface stay apart", "[core][weld]") {
+  // Two closed tetrahedra touching at a corner, each with its own copy of it (CGAL's cow has such a pair
+  // of interior vertices, 44 and 2903): no seam, and welding the corners would pinch the surface into a
+  // non-manifold vertex (before: merged, and every surface method then refused the mesh).
+  Positions P(8, 3);
+  P << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, -1, 0, 0, 0, -1, 0, 0, 0, -1;
+  Faces F(8, 3);
+  F << 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3, 4, 5, 6, 4, 7, 5, 4, 6, 7, 5, 7, 6;
+  CHECK(count_seam_vertices(P, F) == 0);
+  const Weld w = weld_vertices(P, F, 0);
+  CHECK(w.merged == 0);
+  CHECK(w.F == F);
 }
 
 TEST_CASE("weld: pieces touching at a point are no seam (welding would pinch them)", "[core][weld]") {

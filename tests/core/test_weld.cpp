@@ -92,7 +92,7 @@ TEST_CASE("weld: messages about the welded mesh name the file's vertices", "[cor
   CHECK_THROWS_AS(w.file_vertex(4), InvalidInput);
 }
 
-TEST_CASE("weld: only seams are welded; twins inside the surface stay apart", "[core][weld]") {
+TEST_CASE("weld: only seams are welded, twins inside the surface stay apart", "[core][weld]") {
   // Two closed tetrahedra touching at a corner, each with its own copy of it (CGAL's cow has such a pair
   // of interior vertices, 44 and 2903): no seam, and welding the corners would pinch the surface into a
   // non-manifold vertex (before: merged, and every surface method then refused the mesh).

@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -30,21 +31,65 @@ std::vector<std::string> default_scenes() {
 }
 
 
-// One sphere around the rest shape and every result of a scene, so all its pictures share one camera.
-// A result whose box is more than 4 times the rest's across: it blew up, and framing or colouring the
-// others by it would leave their pictures empty (Laplacian editing at 1.5e9 times the area).
-bool exploded(const Positions& rest, const MethodResult& r) {
-  const double across = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm();
-  return (r.result.colwise().maxCoeff() - r.result.colwise().minCoeff()).norm() > 4 * across;
+// An axis-aligned box, grown point by point.
+struct Box {
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  void add(const Vec3& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); }
+  void add(const Positions& P) {
+    if (P.rows() > 0) add(Vec3(P.colwise().minCoeff().transpose())), add(Vec3(P.colwise().maxCoeff().transpose()));
+  }
+  double across() const { return (hi - lo).norm(); }
+};
+
+// What an edit asks for: the rest shape and where the handles take their vertices (a handle scaled by 10
+// asks for a larger shape).
+Box edit_box(const EditCase& c) {
+  Box box;
+  box.add(c.P);
+  for (int v : c.region.constrained_vertices())
+    if (const int k = c.region.handle_of(v); k >= 0) box.add(transform_point(c.transforms[k], c.P.row(v)));
+  return box;
 }
 
-void framing_sphere(const Positions& rest, const std::vector<MethodResult>& results, Vec3& center, double& radius) {
-  Vec3 lo = rest.colwise().minCoeff(), hi = rest.colwise().maxCoeff();
+// A result whose box is more than 4 times the edit's across: it blew up, and framing or colouring the
+// others by it would leave their pictures empty (Laplacian editing at 1.5e9 times the area).
+bool exploded(const Box& edit, const MethodResult& r) {
+  Box box;
+  box.add(r.result);
+  return box.across() > 4 * edit.across();
+}
+
+// One sphere around the edit and every result of a scene that did not blow up, so their pictures share
+// one camera.
+void framing_sphere(Box box, const std::vector<MethodResult>& results, Vec3& center, double& radius) {
+  const Box edit = box;
   for (const auto& r : results)
-    if (r.ok && !exploded(rest, r))
-      lo = lo.cwiseMin(r.result.colwise().minCoeff().transpose()), hi = hi.cwiseMax(r.result.colwise().maxCoeff().transpose());
-  center = 0.5 * (lo + hi);
-  radius = 0.5 * (hi - lo).norm();
+    if (r.ok && !exploded(edit, r)) box.add(r.result);
+  center = 0.5 * (box.lo + box.hi);
+  radius = 0.5 * box.across();
+}
+
+// Draws text in lines of at most `width` pixels, broken at spaces (a word longer than a line is cut),
+// from (x, y) down, as many lines as fit above the image's bottom edge.
+void draw_wrapped(Image& image, int x, int y, int width, const std::string& text, const Vec3& colour) {
+  std::string line, word;
+  std::istringstream words(text);
+  const int step = text_height() + 4;
+  auto flush = [&] {
+    if (!line.empty() && y + text_height() <= image.height) draw_text(image, x, y, line, colour);
+    y += step;
+    line.clear();
+  };
+  while (words >> word) {
+    const std::string longer = line.empty() ? word : line + " " + word;
+    if (text_width(longer) <= width || line.empty()) {
+      line = longer;
+    } else {
+      flush();
+      line = word;
+    }
+  }
+  flush();
 }
 
 struct SceneOutput {
@@ -472,7 +517,8 @@ void add_compare_command(CLI::App& app) {
       view.width = 640;
       view.height = 480;
       view.framing = Framing::BoundingSphere;
-      framing_sphere(rest, results, view.sphere_center, view.sphere_radius);
+      const Box edit = edit_box(c);
+      framing_sphere(edit, results, view.sphere_center, view.sphere_radius);
       a->camera.apply(rest, c.region, view);  // up and view direction; --focus handle frames the handles
       const bool point_cloud = F.rows() == 0;
       if (point_cloud) view.point_radius = default_point_radius(rest);  // the rest's spacing in every picture
@@ -480,7 +526,7 @@ void add_compare_command(CLI::App& app) {
       auto has_distortion = [&](const MethodResult& r) { return r.ok && r.distortion_per_vertex.size() == rest.rows(); };
       double scalar_max = 0;
       for (const auto& r : results)
-        if (has_distortion(r) && !exploded(rest, r)) scalar_max = std::max(scalar_max, robust_scalar_range(r.distortion_per_vertex).second);
+        if (has_distortion(r) && !exploded(edit, r)) scalar_max = std::max(scalar_max, robust_scalar_range(r.distortion_per_vertex).second);
       SceneOutput so{c.name, {}, {}};
       std::vector<Image> column;
       const std::string input_png = "images/" + c.name + "--input.png";
@@ -503,13 +549,28 @@ void add_compare_command(CLI::App& app) {
             save.scalar_name = "detail_change";
           }
           ro.highlighted_faces = &r.self_intersecting_faces;  // in red over the detail colours
+          // A result that blew up, drawn with the others' camera, shows a close-up from inside it.
+          const bool own_frame = exploded(edit, r);
+          Box own;
+          if (own_frame) {
+            own.add(r.result);
+            ro.framing = Framing::BoundingSphere;
+            ro.sphere_center = 0.5 * (own.lo + own.hi);
+            ro.sphere_radius = 0.5 * own.across();
+          }
           Image img = render(r.result, F, ro);
+          if (own_frame) {
+            char text[120];
+            std::snprintf(text, sizeof text, "exploded: %.3g times the edit's size, drawn at its own scale",
+                          own.across() / edit.across());
+            draw_wrapped(img, 10, 10, view.width - 20, text, Vec3(0.6, 0, 0));
+          }
           write_png(img, (out / png).string());
           save_mesh(r.result, F, (out / "meshes" / (c.name + "--" + r.method + ".ply")).string(), save);
           column.push_back(std::move(img));
         } else {
           Image failed(view.width, view.height, Vec3(0.9, 0.85, 0.85));
-          draw_text(failed, 20, view.height / 2, "failed: " + r.error.substr(0, 70), Vec3(0.5, 0, 0));
+          draw_wrapped(failed, 20, view.height / 3, view.width - 40, "failed: " + r.error, Vec3(0.5, 0, 0));
           write_png(failed, (out / png).string());
           column.push_back(std::move(failed));
         }

@@ -83,7 +83,7 @@ std::vector<Mat4> read_def(const std::string& path);
 void write_def(const std::vector<Mat4>& transforms, const std::string& path);
 
 //! Vertices inside the axis-aligned box [lo, hi] (infinite corners allowed). \throw InvalidInput for a NaN
-//! corner.
+//! corner, or lo above hi in a coordinate (corners given the wrong way round).
 std::vector<int> select_box(const Positions& P, const Vec3& lo, const Vec3& hi);
 //! Vertices within radius of center. \throw InvalidInput for a negative or non-finite radius or centre.
 std::vector<int> select_sphere(const Positions& P, const Vec3& center, double radius);

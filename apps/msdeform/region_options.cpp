@@ -59,7 +59,12 @@ std::vector<int> select(const std::string& option, const std::string& spec, cons
   const std::string where = option + " " + spec;
   if (kind == "box") {
     const auto v = numbers(where, args, {6}, "XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX");
-    return select_box(P, vec(v), vec(v, 3));
+    try {
+      return select_box(P, vec(v), vec(v, 3));
+    } catch (const InvalidInput& e) {  // corners the wrong way round: said with the option, not the function
+      const std::string what = e.what(), prefix = "select_box: ";
+      throw InvalidInput(where + ": " + (what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what));
+    }
   }
   if (kind == "sphere") {
     const auto v = numbers(where, args, {4}, "X,Y,Z,R");

@@ -37,6 +37,10 @@ name=$(printf 'b%.0s' $(seq 246)).off
 "$msdeform" deform --scene lift --resolution 2k --method shell -o "$name" >/dev/null || fail "a 250-byte output name"
 [ -s "$name" ] || fail "the 250-byte output was not written"
 
+# A box with its corners the wrong way round said "selects no vertex".
+expect_error 1 "--fixed box:1,1,1,-1,-1,-1: the box's x range is empty (1 > -1): give the low corner first" \
+  "$msdeform" deform lift.off --fixed box:1,1,1,-1,-1,-1 --handle sphere:0.5,0.5,0,0.1 --translate 0,0,0.1 -o x.off
+
 # The geodesic time factor the error messages suggest can be set.
 "$msdeform" deform --scene lift --resolution 2k --method propagate --field geodesic --geodesic-time-factor 4 \
   -o geodesic.off >/dev/null || fail "--geodesic-time-factor"

@@ -174,10 +174,11 @@ DetailDistortionMetric::DetailDistortionMetric(const Positions& rest, const Face
   // up to 0.24 between two results 2e-16 apart).
   if (const double kept = free_area_ratio(rest, B0, F, region); kept < kMinBaseAreaRatio) {
     char text[300];
-    std::snprintf(text, sizeof text,
-                  "%s: the free region faired loses the shape (its area over the triangles with a free vertex is "
-                  "%.3g of the input's), so heights over it would measure the shape, not the details",
-                  who, kept);
+    std::snprintf(
+        text, sizeof text,
+        "%s: the free region faired loses the shape (its area over the triangles with a free vertex is "
+        "%.3g of the input's), so heights over it would measure the shape, not the details",
+        who, kept);
     throw InvalidInput(text);
   }
   NormalDisplacements before;

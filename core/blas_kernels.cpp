@@ -82,14 +82,16 @@ constexpr double kOneBufferMB = 160, kTwoThreadsMB = 512;
 BlasRoom blas_room() {
   BlasRoom room;
   rlimit limit;
-  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY || blas_kernels().empty()) return room;
+  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY || blas_kernels().empty())
+    return room;
   unsigned long pages = 0;  // the process's address space now (the first field of statm)
   if (FILE* statm = std::fopen("/proc/self/statm", "r")) {
     if (std::fscanf(statm, "%lu", &pages) != 1) pages = 0;
     std::fclose(statm);
   }
   room.limit_mb = static_cast<double>(limit.rlim_cur) / kMB;
-  room.left_mb = room.limit_mb - static_cast<double>(pages) * static_cast<double>(sysconf(_SC_PAGESIZE)) / kMB;
+  room.left_mb =
+      room.limit_mb - static_cast<double>(pages) * static_cast<double>(sysconf(_SC_PAGESIZE)) / kMB;
   room.threads = room.left_mb >= kTwoThreadsMB ? 2 : room.left_mb >= kOneBufferMB || blas_buffer_held ? 1 : 0;
   return room;
 }
@@ -98,11 +100,12 @@ void blas_call_finished() { blas_buffer_held = true; }
 
 std::string no_room_for_blas_message(const BlasRoom& room, const char* who) {
   char text[400];
-  std::snprintf(text, sizeof text,
-                "%s: the address-space limit (ulimit -v) of %.0f MB leaves %.0f MB, and the factorisation's BLAS "
-                "(OpenBLAS) needs %.0f MB for its work buffer (it would wait for it forever): raise the limit to at "
-                "least %.0f MB",
-                who, room.limit_mb, room.left_mb, kOneBufferMB, room.limit_mb - room.left_mb + kOneBufferMB);
+  std::snprintf(
+      text, sizeof text,
+      "%s: the address-space limit (ulimit -v) of %.0f MB leaves %.0f MB, and the factorisation's BLAS "
+      "(OpenBLAS) needs %.0f MB for its work buffer (it would wait for it forever): raise the limit to at "
+      "least %.0f MB",
+      who, room.limit_mb, room.left_mb, kOneBufferMB, room.limit_mb - room.left_mb + kOneBufferMB);
   return text;
 }
 

@@ -264,8 +264,9 @@ std::vector<int> select_box(const Positions& P, const Vec3& lo, const Vec3& hi) 
     throw InvalidInput("select_box: a corner of the box is NaN");
   for (int k = 0; k < 3; ++k)
     if (lo[k] > hi[k])
-      throw InvalidInput(std::string("select_box: the box's ") + "xyz"[k] + " range is empty (" + format_number(lo[k]) +
-                         " > " + format_number(hi[k]) + "): give the low corner first");
+      throw InvalidInput(std::string("select_box: the box's ") + "xyz"[k] + " range is empty (" +
+                         format_number(lo[k]) + " > " + format_number(hi[k]) +
+                         "): give the low corner first");
   std::vector<int> out;
   for (int i = 0; i < P.rows(); ++i)
     if ((P.row(i).transpose().array() >= lo.array()).all() && (P.row(i).transpose().array() <= hi.array()).all())

@@ -311,7 +311,8 @@ class Factorisation {
 
 }  // namespace
 
-SupernodalFactorisationResult factorize_supernodal(const cholmod_sparse* A, cholmod_factor* L, int blas_threads) {
+SupernodalFactorisationResult factorize_supernodal(const cholmod_sparse* A, cholmod_factor* L,
+                                                   int blas_threads) {
   SupernodalFactorisationResult result;
   if (!A || !L || !L->is_super || !L->is_ll || L->xtype != CHOLMOD_REAL || L->itype != CHOLMOD_LONG || !L->x ||
       L->n == 0 || L->n > static_cast<size_t>(INT_MAX) || A->itype != CHOLMOD_LONG || A->xtype != CHOLMOD_REAL ||

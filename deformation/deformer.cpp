@@ -74,11 +74,12 @@ void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::s
     const bool reflection = rank == 3 && (A / sigma(0)).determinant() < 0;
     char text[400];
     if (const double turn = rank == 3 && !reflection ? turn_degrees(A) : 0; turn > 179.9) {
-      std::snprintf(text, sizeof text,
-                    "%s%s%zu is a half turn (%.6g degrees): which way round the handle turns is not defined, so "
-                    "methods that blend or iterate rotations (propagate, gradient, arap, primo, and multi-scale "
-                    "over them) may turn the region either way; give less than 180 degrees",
-                    who.c_str(), kHandleTransformWarning, k, turn);
+      std::snprintf(
+          text, sizeof text,
+          "%s%s%zu is a half turn (%.6g degrees): which way round the handle turns is not defined, so "
+          "methods that blend or iterate rotations (propagate, gradient, arap, primo, and multi-scale "
+          "over them) may turn the region either way; give less than 180 degrees",
+          who.c_str(), kHandleTransformWarning, k, turn);
       warnings.emplace_back(text);
     }
     if (rank == 3 && !reflection) continue;

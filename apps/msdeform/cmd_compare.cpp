@@ -30,13 +30,13 @@ std::vector<std::string> default_scenes() {
   return {"lift", "bend120", "twist135", "bar-lift", "bar-bend120", "bar-twist135", "crease120"};
 }
 
-
 // An axis-aligned box, grown point by point.
 struct Box {
   Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
   void add(const Vec3& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); }
   void add(const Positions& P) {
-    if (P.rows() > 0) add(Vec3(P.colwise().minCoeff().transpose())), add(Vec3(P.colwise().maxCoeff().transpose()));
+    if (P.rows() > 0)
+      add(Vec3(P.colwise().minCoeff().transpose())), add(Vec3(P.colwise().maxCoeff().transpose()));
   }
   double across() const { return (hi - lo).norm(); }
 };
@@ -526,7 +526,8 @@ void add_compare_command(CLI::App& app) {
       auto has_distortion = [&](const MethodResult& r) { return r.ok && r.distortion_per_vertex.size() == rest.rows(); };
       double scalar_max = 0;
       for (const auto& r : results)
-        if (has_distortion(r) && !exploded(edit, r)) scalar_max = std::max(scalar_max, robust_scalar_range(r.distortion_per_vertex).second);
+        if (has_distortion(r) && !exploded(edit, r))
+          scalar_max = std::max(scalar_max, robust_scalar_range(r.distortion_per_vertex).second);
       SceneOutput so{c.name, {}, {}};
       std::vector<Image> column;
       const std::string input_png = "images/" + c.name + "--input.png";

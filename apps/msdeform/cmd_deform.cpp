@@ -47,10 +47,11 @@ void add_deform_command(CLI::App& app) {
   cmd->add_option("-o,--output", *output, "Deformed mesh to write (.off .obj .ply .stl); written atomically")->required();
   auto weld = std::make_shared<double>(0);
   CLI::Option* weld_option =
-      cmd->add_option("--weld", *weld,
-                      "Weld seam vertices (boundary vertices on coinciding boundary edges, as info counts them) "
-                      "within EPS (mesh units; 0: identical coordinates) before deforming, so a mesh split "
-                      "along seams deforms as one surface; the output keeps the file's vertices and faces")
+      cmd->add_option(
+             "--weld", *weld,
+             "Weld seam vertices (boundary vertices on coinciding boundary edges, as info counts them) "
+             "within EPS (mesh units; 0: identical coordinates) before deforming, so a mesh split "
+             "along seams deforms as one surface; the output keeps the file's vertices and faces")
           ->check(CLI::Validator(
               [](std::string& text) {  // -0 is 0; a word is the parser's to name
                 const std::optional<double> x = decimal_number(text);

@@ -53,8 +53,8 @@ void add_common_checks(CLI::App& app) {
 // own BLAS calls need (blas_room()). Returns where exec fails or is not needed.
 void rerun_without_blas_worker_under_a_limit(char** argv) {
   rlimit limit;
-  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY || std::getenv("OPENBLAS_NUM_THREADS") ||
-      msd::blas_kernels().empty())
+  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY ||
+      std::getenv("OPENBLAS_NUM_THREADS") || msd::blas_kernels().empty())
     return;
   setenv("OPENBLAS_NUM_THREADS", "1", 1);
   execv("/proc/self/exe", argv);

@@ -236,7 +236,8 @@ TEST_CASE("detail distortion: zero for the input and for a rigid motion, 0.5 for
                   InvalidInput);
 }
 
-TEST_CASE("detail distortion: not measured over a free tube that fairing shrinks to its axis", "[analysis][metrics]") {
+TEST_CASE("detail distortion: not measured over a free tube that fairing shrinks to its axis",
+          "[analysis][metrics]") {
   // A tube of radius 0.2 with its ends fixed and handled, free in between (the survey's cylinder and
   // cactus are such edits): its faired base loses the shape, and heights over it jumped between base
   // points under rounding (survey cactus: 191 vertices changed by up to 0.24 between results 2e-16 apart).
@@ -249,7 +250,9 @@ TEST_CASE("detail distortion: not measured over a free tube that fairing shrinks
       for (int j = 0; j < around; ++j) {
         const double x = length * i / (rings - 1), a = 2 * M_PI * j / around;
         P.row(i * around + j) = Vec3(x, 0.2 * std::cos(a), 0.2 * std::sin(a));
-        codes[i * around + j] = x < 0.1 * length ? Region::kFixed : x > 0.9 * length ? 2 : Region::kFree;  // 2: handle 0
+        codes[i * around + j] = x < 0.1 * length   ? Region::kFixed
+                                : x > 0.9 * length ? 2
+                                                   : Region::kFree;  // 2: handle 0
       }
     for (int i = 0, f = 0; i + 1 < rings; ++i)
       for (int j = 0; j < around; ++j) {

@@ -57,7 +57,8 @@ TEST_CASE("geometric predicates select the right vertices", "[core][region]") {
   P << 0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 1;
   CHECK(select_box(P, Vec3(-0.5, -0.5, -0.5), Vec3(1.5, 0.5, 0.5)) == std::vector<int>{0, 1});
   // Corners the wrong way round said "selects no vertex" in the tool.
-  CHECK_THROWS_WITH(select_box(P, Vec3(1, 1, 1), Vec3(-1, 1, 1)), Contains("the box's x range is empty (1 > -1)"));
+  CHECK_THROWS_WITH(select_box(P, Vec3(1, 1, 1), Vec3(-1, 1, 1)),
+                    Contains("the box's x range is empty (1 > -1)"));
   CHECK(select_sphere(P, Vec3(0, 0, 0), 1.0) == std::vector<int>{0, 1, 2});
   CHECK(select_halfspace(P, Vec3(0.5, 0, 0), Vec3(1, 0, 0)) == std::vector<int>{1, 3});
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <numeric>
 #include <optional>
@@ -148,17 +149,18 @@ struct SparseSPDSolver::Impl {
   void numeric(cholmod_sparse* S) {
     const auto t0 = std::chrono::steady_clock::now();
     common.status = CHOLMOD_OK;
-    // A supernodal factor calls BLAS, which must find room for its work buffers (blas_kernels.h).
-    const BlasRoom room = L->is_super ? blas_room() : BlasRoom();
-    if (room.threads == 0) {
-      cholmod_l_free_sparse(&S, &common);
-      release();
-      throw SolverError(no_room_for_blas_message(room, "SparseSPDSolver"));
-    }
     // On two threads where the factor is supernodal (supernodal_factorisation.h), by CHOLMOD otherwise.
     SupernodalFactorisationResult result;
     if (L->is_super && (L->xtype == CHOLMOD_REAL || cholmod_l_change_factor(CHOLMOD_REAL, true, true, true, true, L, &common)))
-      result = factorize_supernodal(S, L, room.threads);
+      result = factorize_supernodal(S, L);
+    // CHOLMOD's own supernodal factorisation calls BLAS too, which must find room for its work buffer.
+    if (result.status == SupernodalFactorisationResult::kUnsupported && L->is_super && common.status >= CHOLMOD_OK)
+      result.room = blas_room();
+    if (result.status == SupernodalFactorisationResult::kNoRoomForBlas || result.room.threads == 0) {
+      cholmod_l_free_sparse(&S, &common);
+      release();
+      throw SolverError(no_room_for_blas_message(result.room, "SparseSPDSolver"));
+    }
     if (result.status == SupernodalFactorisationResult::kPatternMismatch) {
       cholmod_l_free_sparse(&S, &common);
       release();
@@ -170,10 +172,10 @@ struct SparseSPDSolver::Impl {
       common.status = CHOLMOD_OUT_OF_MEMORY;
     else if (result.status == SupernodalFactorisationResult::kUnsupported && common.status >= CHOLMOD_OK) {
       std::optional<OneBlasThread> one_blas_thread;
-      if (room.threads < 2) one_blas_thread.emplace();
+      if (result.room.threads < 2) one_blas_thread.emplace();
       cholmod_l_factorize(S, L, &common);
+      if (L->is_super && common.status >= CHOLMOD_OK) blas_call_finished();
     }
-    if (L->is_super && common.status >= CHOLMOD_OK) blas_call_finished();
     numeric_seconds = seconds_since(t0);
     cholmod_l_free_sparse(&S, &common);
     if (common.status == CHOLMOD_NOT_POSDEF) {
@@ -216,6 +218,20 @@ struct SparseSPDSolver::Impl {
     b.xtype = CHOLMOD_REAL;
     b.dtype = CHOLMOD_DOUBLE;
     auto& c = const_cast<cholmod_common&>(common);
+    // Under an address-space limit CHOLMOD's solve crashed where its result and workspaces (about three
+    // n × k blocks) did not fit (cage-harmonic's many columns on the 10k lift under 680–700 MB).
+    if (const BlasRoom room = blas_room(); room.limit_mb > 0) {
+      const double need_mb = 3.0 * 8.0 * static_cast<double>(B.size()) / (1 << 20);
+      if (room.left_mb < need_mb + 16) {
+        char text[300];
+        std::snprintf(text, sizeof text,
+                      "SparseSPDSolver: out of memory: the address-space limit (ulimit -v) of %.0f MB leaves %.0f MB, "
+                      "and a solve with %ld right-hand sides needs about %.0f MB: raise the limit to at least %.0f MB",
+                      room.limit_mb, room.left_mb, static_cast<long>(B.cols()), need_mb,
+                      room.limit_mb - room.left_mb + need_mb + 16);
+        throw SolverError(text);
+      }
+    }
     if (!cholmod_l_solve2(CHOLMOD_A, L, &b, nullptr, &X, nullptr, &Y, &E, &c))
       throw SolverError("SparseSPDSolver: solve failed (CHOLMOD status " + std::to_string(common.status) + ")");
     if (Xout.rows() != B.rows() || Xout.cols() != B.cols()) Xout.resize(B.rows(), B.cols());

@@ -97,7 +97,7 @@ class Factorisation {
 
   // Factors L: the two groups in parallel, each summing its updates to the supernodes above the split
   // (group 0's in L, group 1's in a buffer laid out alike), then those supernodes.
-  SupernodalFactorisationResult run(int blas_threads) {
+  SupernodalFactorisationResult run() {
     SupernodalFactorisationResult result;
     const std::vector<int> group = split();
     if (group.empty()) return result;  // not postordered: kUnsupported
@@ -110,9 +110,16 @@ class Factorisation {
     std::unique_ptr<double[]> buffer(new double[std::max<long>(buffer_size, 1)]);
     allocate(work_[0], order[0]);
     allocate(work_[1], order[1]);
+    // Asked now, with the factor and the workspaces allocated: OpenBLAS's buffers come on top of them.
+    const BlasRoom room = blas_room();
+    if (room.threads == 0) {
+      result.status = SupernodalFactorisationResult::kNoRoomForBlas;
+      result.room = room;
+      return result;
+    }
     std::optional<OneBlasThread> one_blas_thread;  // all along where BLAS has room for one thread only
-    if (blas_threads < 2) one_blas_thread.emplace();
-    if (blas_threads >= 2) {
+    if (room.threads < 2) one_blas_thread.emplace();
+    if (room.threads >= 2) {
       OneBlasThread one_thread;
       tbb::parallel_invoke([&] { factor_group(0, order[0], order[2], x_, in_l); },
                            [&] { factor_group(1, order[1], order[2], buffer.get(), in_buffer); });
@@ -120,6 +127,7 @@ class Factorisation {
       factor_group(0, order[0], order[2], x_, in_l);
       factor_group(1, order[1], order[2], buffer.get(), in_buffer);
     }
+    blas_call_finished();  // OpenBLAS keeps the buffer it found for the next call
     work_[0] = Workspace(), work_[1] = Workspace();
     if (!failed()) {
       allocate(work_[2], order[2]);
@@ -311,15 +319,14 @@ class Factorisation {
 
 }  // namespace
 
-SupernodalFactorisationResult factorize_supernodal(const cholmod_sparse* A, cholmod_factor* L,
-                                                   int blas_threads) {
+SupernodalFactorisationResult factorize_supernodal(const cholmod_sparse* A, cholmod_factor* L) {
   SupernodalFactorisationResult result;
   if (!A || !L || !L->is_super || !L->is_ll || L->xtype != CHOLMOD_REAL || L->itype != CHOLMOD_LONG || !L->x ||
       L->n == 0 || L->n > static_cast<size_t>(INT_MAX) || A->itype != CHOLMOD_LONG || A->xtype != CHOLMOD_REAL ||
       A->dtype != CHOLMOD_DOUBLE || A->stype >= 0 || A->nrow != L->n || A->ncol != L->n)
     return result;
   try {
-    const SupernodalFactorisationResult done = Factorisation(A, L).run(blas_threads);
+    const SupernodalFactorisationResult done = Factorisation(A, L).run();
     if (done.status == SupernodalFactorisationResult::kDone) L->minor = L->n;
     return done;
   } catch (const std::bad_alloc&) {

@@ -11,14 +11,18 @@
 //! its group's updates to the supernodes above the split, which are factored last (OpenBLAS may use both
 //! cores there). The factor is CHOLMOD's: cholmod_solve and SupernodalSubstitution use it unchanged.
 
+#include "msdeform/core/blas_kernels.h"
+
 struct cholmod_factor_struct;
 struct cholmod_sparse_struct;
 
 namespace msd {
 
 struct SupernodalFactorisationResult {
-  enum Status { kDone, kNotPositiveDefinite, kPatternMismatch, kOutOfMemory, kUnsupported } status = kUnsupported;
+  enum Status { kDone, kNotPositiveDefinite, kPatternMismatch, kOutOfMemory, kNoRoomForBlas, kUnsupported } status =
+      kUnsupported;
   long column = -1;  //!< kNotPositiveDefinite: the factor's column whose pivot was not positive
+  BlasRoom room;     //!< kNoRoomForBlas: what the address-space limit left when BLAS was to start
 };
 
 //! L = chol(P A Pᵀ) into L, a supernodal factor with 64-bit indices from a postordered analysis of A
@@ -29,11 +33,12 @@ struct SupernodalFactorisationResult {
 //! A outside L's pattern (CHOLMOD's own factorisation drops such entries silently); kNotPositiveDefinite
 //! with the first failing column found (after either, L's values are of no use); kOutOfMemory when the
 //! workspace does not fit (4 n indices, the permuted A, three update blocks of L->maxcsize entries and the
-//! values of the supernodes above the split once more). With blas_threads 2 it calls BLAS from two threads,
-//! with OpenBLAS on one thread meanwhile (a process-wide setting, restored after), and lets OpenBLAS use
-//! its threads for the supernodes above the split; with 1 (blas_room() found room for one OpenBLAS work
-//! buffer only) everything runs on the calling thread, OpenBLAS on one thread.
-SupernodalFactorisationResult factorize_supernodal(const cholmod_sparse_struct* A, cholmod_factor_struct* L,
-                                                   int blas_threads = 2);
+//! values of the supernodes above the split once more). Calls BLAS from two threads, with OpenBLAS on one
+//! thread meanwhile (a process-wide setting, restored after), and lets OpenBLAS use its threads for the
+//! supernodes above the split. Under an address-space limit it asks blas_room() once everything else is
+//! allocated: with room for one OpenBLAS work buffer only, everything runs on the calling thread with
+//! OpenBLAS on one thread; with none it returns kNoRoomForBlas before any BLAS call (OpenBLAS would wait
+//! for its buffer forever).
+SupernodalFactorisationResult factorize_supernodal(const cholmod_sparse_struct* A, cholmod_factor_struct* L);
 
 }  // namespace msd

@@ -80,11 +80,10 @@ EditCase weld_case(EditCase c, double eps) {
   c.P = weld->P;
   c.F = weld->F;
   c.surface_problem = check_surface(c.P, c.F).problem();
-  if (!c.surface_problem.empty() && weld->faces_dropped > 0)  // the weld's doing, not the file's
+  if (!c.surface_problem.empty() && weld->merged > 0)  // the weld's doing, not the file's
     c.surface_problem = "welding within " + format_number(eps) + " merged " + std::to_string(weld->welded_of.size()) +
-                        " vertices into " + std::to_string(weld->P.rows()) + " and dropped " +
-                        std::to_string(weld->faces_dropped) + " of " + std::to_string(c.file_F.rows()) +
-                        " faces, which left " + c.surface_problem + " (use a smaller --weld)";
+                        " vertices into " + std::to_string(weld->P.rows()) + ", which left " + c.surface_problem +
+                        " (use a smaller --weld)";
   c.seam_vertices = count_seam_vertices(c.P, c.F);
   c.weld = std::move(weld);
   return c;

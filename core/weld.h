@@ -23,9 +23,8 @@ struct Weld {
   //! group's welded vertex sits at its lowest-numbered member, and groups are numbered in that order.
   std::vector<int> welded_of;
   Positions P;     //!< #W by 3 welded positions
-  Faces F;         //!< the faces re-indexed, without those that lost a corner to the merge
+  Faces F;         //!< the faces re-indexed (none loses a corner: an edge's ends are never merged)
   int merged = 0;  //!< #V − #W
-  int faces_dropped = 0;
   //! Positions of the welded mesh (#W by 3) back on the original vertices (#V by 3): every member of a
   //! group gets its group's position. \throw InvalidInput for a row count other than #W.
   Positions unweld(const Positions& welded) const;
@@ -40,8 +39,8 @@ struct Weld {
 //! Merges the vertices of open seams (count_seam_vertices) within eps of each other (eps in mesh units; 0:
 //! identical coordinates only). Other vertices within eps stay apart, as interior twins (CGAL's cow has
 //! one pair) and holes touching at a point: merging them would pinch the surface into a non-manifold
-//! vertex.
-//! \throw InvalidInput for a negative or non-finite eps, or a face index outside [0, #V).
+//! vertex. \throw InvalidInput for a negative or non-finite eps, a face index outside [0, #V), or an eps
+//! that would merge the two ends of an edge (chaining along the boundary, it collapsed whole loops).
 Weld weld_vertices(const Positions& P, const Faces& F, double eps);
 
 }  // namespace msd

@@ -81,8 +81,7 @@ void add_deform_command(CLI::App& app) {
     const Region file_region = c.region;  // on the file's vertices, for --write-sel (welding renumbers them)
     if (welding) c = weld_case(std::move(c), *weld);
     if (c.weld)
-      std::printf("welded %d vertices into others (within %g); %d faces lost a corner and were dropped\n",
-                  c.weld->merged, *weld, c.weld->faces_dropped);
+      std::printf("welded %d vertices into others (within %g)\n", c.weld->merged, *weld);
     if (c.seam_vertices > 0)
       std::fprintf(stderr, "warning: %d boundary vertices lie at the coordinates of another boundary vertex (a mesh "
                            "split along seams): it deforms as separate pieces there; --weld 0 joins them\n",

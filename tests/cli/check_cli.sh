@@ -203,8 +203,9 @@ grep -q "welded" out.txt || fail "--weld printed nothing"
 expect_error 2 "--weld: 'nan' is not a finite decimal number" "$msdeform" deform split.off --sel split.sel \
   --def lift.def --method shell --weld nan -o nan.off
 grep -q "split along seams" err.txt && fail "a seam warning after welding"
-# A weld so wide it merges the whole mesh says so, rather than calling the file a point cloud.
-expect_error 1 "welding within 10 merged" "$msdeform" deform split.off --handle box:-9,-9,-9,9,9,9 --translate 0.1,0,0 \
+# A weld so wide it would merge the whole mesh is refused naming an edge it would collapse (it said the weld
+# left a point cloud; before that, it collapsed the boundary loops with exit 0).
+expect_error 1 "the two ends of an edge of length" "$msdeform" deform split.off --handle box:-9,-9,-9,9,9,9 --translate 0.1,0,0 \
   --weld 10 --method arap -o x.off
 [ "$(sed -n 2p welded.off | cut -d' ' -f1)" = "$(sed -n 2p split.off | cut -d' ' -f1)" ] ||
   fail "--weld changed the vertex count of the output"

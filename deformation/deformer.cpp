@@ -11,7 +11,9 @@
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/adjacency.h"
 #include "msdeform/core/extent.h"
+#include "msdeform/core/laplacian.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/rotation.h"
 #include "msdeform/core/surface_check.h"
@@ -102,6 +104,36 @@ void affine_targets(const Positions& rest, const std::vector<int>& constrained, 
   }
 }
 
+namespace {
+
+// A warning where zero-area triangles, which the cotan Laplacian leaves out, cut the surface: parts joined
+// only through them move as separate pieces under the methods built on it (a strip of 40 collapsed
+// triangles across a grid: one side stayed at rest while the other followed the handle, exit 0).
+std::string zero_area_cut_warning(const Positions& P, const Faces& F, const std::string& who) {
+  Faces kept(F.rows(), 3);
+  Eigen::Index rows = 0;
+  long degenerate = 0, first = -1;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    if (triangle_cotangents(P.row(F(f, 0)), P.row(F(f, 1)), P.row(F(f, 2))).degenerate) {
+      if (degenerate++ == 0) first = f;
+    } else {
+      kept.row(rows++) = F.row(f);
+    }
+  }
+  if (degenerate == 0) return {};
+  kept.conservativeResize(rows, 3);
+  const int nv = static_cast<int>(P.rows());
+  const std::vector<int> whole = vertex_components(F, nv), cut = vertex_components(kept, nv);
+  const int pieces = 1 + *std::max_element(whole.begin(), whole.end()),
+            cut_pieces = cut.empty() ? 0 : 1 + *std::max_element(cut.begin(), cut.end());
+  if (cut_pieces <= pieces) return {};
+  return who + ": " + std::to_string(degenerate) + " zero-area triangle(s) (the first is face " + std::to_string(first) +
+         ") " + kZeroAreaCutWarning + " " + std::to_string(cut_pieces) + " pieces joined only through them; methods built on "
+         "the cotangent Laplacian leave such triangles out and move the pieces apart: repair the mesh there";
+}
+
+}  // namespace
+
 void Deformer::prepare(const Positions& P, const Faces& F, const Region& region) {
   prepared_ = false;
   prepare_failed_ = true;  // until do_prepare() returns
@@ -133,6 +165,8 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
     throw InvalidInput(name() + ": the region has no handle vertex (selection code 2 or higher); nothing to move");
   if (std::string torn = torn_edges_warning(F, region, name()); !torn.empty())
     prepare_warnings_.push_back(std::move(torn));
+  if (surface)
+    if (std::string cut = zero_area_cut_warning(P, F, name()); !cut.empty()) prepare_warnings_.push_back(std::move(cut));
   try {
     do_prepare(P, F, region);
   } catch (const SolverError& e) {

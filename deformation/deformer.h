@@ -195,6 +195,9 @@ class LocalFrameDeformer : public Deformer {
 //! In the prepare warning about edges joining vertices that different transforms place (fixed and a
 //! handle, or two handles, with no free vertex between them to deform).
 constexpr const char* kTornEdgesWarning = "vertices placed by different transforms";
+//! In the prepare warning about zero-area triangles that cut the surface into pieces joined only through
+//! them (the cotan Laplacian leaves them out).
+constexpr const char* kZeroAreaCutWarning = "cut the surface into";
 //! In the frame warning of a method that stopped before its tolerance (Deformer::end_frame).
 constexpr const char* kNotConvergedWarning = ": stopped after ";
 

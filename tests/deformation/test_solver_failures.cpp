@@ -45,6 +45,42 @@ TEST_CASE("a free vertex whose faces all have zero area: refused by name, or pla
   }
 }
 
+TEST_CASE("zero-area triangles that cut the surface in two are warned about by every surface method",
+          "[deformation][solver]") {
+  // A 21 x 21 grid whose column x = 0.5 lies on x = 0.55: its 40 triangles have no area, the cotan
+  // Laplacian leaves them out, and shell moved the two sides as separate pieces (one at rest, one with
+  // the handle: a cliff across the free region) without a word.
+  const int n = 21;
+  Positions P(n * n, 3);
+  Faces F(2 * (n - 1) * (n - 1), 3);
+  std::vector<int> codes(P.rows(), Region::kFree);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double x = (i == 10 ? 11 : i) / double(n - 1), y = j / double(n - 1);
+      P.row(i * n + j) = Vec3(x, y, 0);
+      codes[i * n + j] = i < 3 ? Region::kFixed : i > 17 ? 2 : Region::kFree;
+    }
+  for (int i = 0, f = 0; i + 1 < n; ++i)
+    for (int j = 0; j + 1 < n; ++j) {
+      const int a = i * n + j;
+      F.row(f++) = Eigen::RowVector3i(a, a + n, a + n + 1);
+      F.row(f++) = Eigen::RowVector3i(a, a + n + 1, a + 1);
+    }
+  const Region region = Region::from_codes(std::move(codes));
+  for (const char* name : {"shell", "propagate", "gradient", "multiscale-normal"}) {
+    INFO(name);
+    const auto deformer = builtin_methods().make(name);
+    deformer->prepare(P, F, region);
+    int said = 0;
+    for (const std::string& w : deformer->prepare_warnings())
+      if (w.find(kZeroAreaCutWarning) != std::string::npos) {
+        ++said;
+        CHECK_THAT(w, Contains("40 zero-area triangle(s)") && Contains("2 pieces"));
+      }
+    CHECK(said == 1);
+  }
+}
+
 #ifdef MSD_HAVE_CHOLMOD
 #include <cholmod.h>
 

@@ -560,7 +560,8 @@ PermissionError for a missing or read-only folder.)doc");
         return codes_array(msd::select_halfspace(to_positions(V, "V"), to_vec3(point, "point"), to_vec3(normal, "normal")));
       },
       py::arg("V"), py::arg("point"), py::arg("normal"),
-      "Indices (int32, ascending) of the rows p of V (#V, 3) with (p - point) . normal >= 0.");
+      "Indices (int32, ascending) of the rows p of V (#V, 3) with (p - point) . normal >= 0: the side the "
+      "normal points to. (The tool's --fixed halfspace:NX,NY,NZ,D selects the other side, n . p < d.)");
 }
 
 // ---------------------------------------------------------------------------------------------------

@@ -9,9 +9,9 @@
 
 #include <Eigen/SVD>
 
+#include "msdeform/core/adjacency.h"
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
-#include "msdeform/core/adjacency.h"
 #include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/mesh.h"

@@ -61,11 +61,12 @@ void rerun_without_blas_worker_under_a_limit(char** argv) {
   unsetenv("OPENBLAS_NUM_THREADS");
 }
 
-// A thread that could not start (TBB's "pthread_create has failed", std::system_error from std::thread):
+// A thread that could not start (TBB's "pthread_create has failed", std::thread's EAGAIN):
 // the process ran out of address space or of processes, not a fault of the program.
 bool thread_start_failed(const std::exception& e) {
-  return std::string_view(e.what()).find("pthread_create") != std::string_view::npos ||
-         dynamic_cast<const std::system_error*>(&e) != nullptr;
+  if (const auto* s = dynamic_cast<const std::system_error*>(&e))
+    return s->code() == std::errc::resource_unavailable_try_again;
+  return std::string_view(e.what()).find("pthread_create") != std::string_view::npos;
 }
 
 }  // namespace

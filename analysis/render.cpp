@@ -19,6 +19,7 @@
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/core/surface_check.h"
+#include "msdeform/detail/embree_error.h"
 
 namespace msd {
 namespace {
@@ -68,8 +69,8 @@ class EmbreeScene {
   EmbreeScene(const Positions& P, const Faces& F, double point_radius) {
     device_ = rtcNewDevice(nullptr);
     if (!device_)
-      throw Error("render: Embree could not create a device (error " +
-                  std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) + ")");
+      throw Error("render: Embree could not create a device (" +
+                  embree_error_text(static_cast<int>(rtcGetDeviceError(nullptr))) + ")");
     scene_ = rtcNewScene(device_);
     const bool points = F.rows() == 0;
     RTCGeometry geometry =
@@ -151,8 +152,8 @@ class EmbreeScene {
     ray.flags = 0;
   }
   [[noreturn]] void fail(const char* what) const {
-    throw Error(std::string("render: Embree ") + what + " (error " +
-                std::to_string(static_cast<int>(rtcGetDeviceError(device_))) + ")");
+    throw Error(std::string("render: Embree ") + what + " (" +
+                embree_error_text(static_cast<int>(rtcGetDeviceError(device_))) + ")");
   }
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;

@@ -98,15 +98,22 @@ BlasRoom blas_room() {
 
 void blas_call_finished() { blas_buffer_held = true; }
 
+std::string address_space_message(const BlasRoom& room, const char* who, const std::string& what,
+                                  double need_mb) {
+  char numbers[200];
+  std::snprintf(numbers, sizeof numbers, "%.0f MB leaves %.0f MB, and ", room.limit_mb, room.left_mb);
+  char raise[120];
+  std::snprintf(raise, sizeof raise, " needs %.0f MB: raise the limit to at least %.0f MB", need_mb,
+                room.limit_mb - room.left_mb + need_mb);
+  return std::string(who) + ": the address-space limit (ulimit -v) of " + numbers + what + raise;
+}
+
 std::string no_room_for_blas_message(const BlasRoom& room, const char* who) {
-  char text[400];
-  std::snprintf(
-      text, sizeof text,
-      "%s: the address-space limit (ulimit -v) of %.0f MB leaves %.0f MB, and the factorisation's BLAS "
-      "(OpenBLAS) needs %.0f MB for its work buffer (it would wait for it forever): raise the limit to at "
-      "least %.0f MB",
-      who, room.limit_mb, room.left_mb, kOneBufferMB, room.limit_mb - room.left_mb + kOneBufferMB);
-  return text;
+  return address_space_message(
+      room, who,
+      "the work buffer of the factorisation's BLAS (OpenBLAS, which would wait for it "
+      "forever)",
+      kOneBufferMB);
 }
 
 OneBlasThread::OneBlasThread() {

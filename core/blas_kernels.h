@@ -42,8 +42,11 @@ struct BlasRoom {
 BlasRoom blas_room();
 //! Tells blas_room() that a BLAS call on one thread finished (OpenBLAS then holds a buffer to reuse).
 void blas_call_finished();
-//! "the address-space limit (ulimit -v) of L MB leaves M MB ...": why `who` cannot call BLAS (room.threads
-//! 0), and what to change.
+//! "who: the address-space limit (ulimit -v) of L MB leaves M MB, and `what` needs N MB: raise the limit to
+//! at least K MB": why an allocation of need_mb would not fit under the limit, and what to change.
+std::string address_space_message(const BlasRoom& room, const char* who, const std::string& what,
+                                  double need_mb);
+//! address_space_message for BLAS's work buffer: why `who` cannot call BLAS (room.threads 0).
 std::string no_room_for_blas_message(const BlasRoom& room, const char* who);
 
 //! OpenBLAS on one thread for the lifetime of the object (its own threads would share themselves between

@@ -222,15 +222,10 @@ struct SparseSPDSolver::Impl {
     // n × k blocks) did not fit (cage-harmonic's many columns on the 10k lift under 680–700 MB).
     if (const BlasRoom room = blas_room(); room.limit_mb > 0) {
       const double need_mb = 3.0 * 8.0 * static_cast<double>(B.size()) / (1 << 20);
-      if (room.left_mb < need_mb + 16) {
-        char text[300];
-        std::snprintf(text, sizeof text,
-                      "SparseSPDSolver: out of memory: the address-space limit (ulimit -v) of %.0f MB leaves %.0f MB, "
-                      "and a solve with %ld right-hand sides needs about %.0f MB: raise the limit to at least %.0f MB",
-                      room.limit_mb, room.left_mb, static_cast<long>(B.cols()), need_mb,
-                      room.limit_mb - room.left_mb + need_mb + 16);
-        throw SolverError(text);
-      }
+      if (room.left_mb < need_mb + 16)
+        throw SolverError(address_space_message(
+            room, "SparseSPDSolver: out of memory",
+            "a solve with " + std::to_string(B.cols()) + " right-hand sides", need_mb + 16));
     }
     if (!cholmod_l_solve2(CHOLMOD_A, L, &b, nullptr, &X, nullptr, &Y, &E, &c))
       throw SolverError("SparseSPDSolver: solve failed (CHOLMOD status " + std::to_string(common.status) + ")");

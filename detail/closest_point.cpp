@@ -11,6 +11,7 @@
 #include "msdeform/core/errors.h"
 #include "msdeform/core/local_frame.h"
 #include "msdeform/core/parallel.h"
+#include "msdeform/detail/embree_error.h"
 
 namespace msd {
 namespace {
@@ -154,22 +155,7 @@ bool point_query_callback(RTCPointQueryFunctionArguments* args) {
 }
 
 std::string embree_error(RTCDevice device) {
-  switch (rtcGetDeviceError(device)) {
-    case RTC_ERROR_NONE:
-      return "no error";
-    case RTC_ERROR_INVALID_ARGUMENT:
-      return "invalid argument";
-    case RTC_ERROR_INVALID_OPERATION:
-      return "invalid operation";
-    case RTC_ERROR_OUT_OF_MEMORY:
-      return "out of memory";
-    case RTC_ERROR_UNSUPPORTED_CPU:
-      return "unsupported CPU";
-    case RTC_ERROR_CANCELLED:
-      return "cancelled";
-    default:
-      return "unknown error";
-  }
+  return embree_error_text(static_cast<int>(rtcGetDeviceError(device)));
 }
 
 }  // namespace
@@ -290,3 +276,22 @@ std::vector<ClosestPoint> ClosestPointQuery::query_all(const Positions& points) 
 }
 
 }  // namespace msd
+
+std::string msd::embree_error_text(int code) {
+  switch (static_cast<RTCError>(code)) {
+    case RTC_ERROR_NONE:
+      return "no error";
+    case RTC_ERROR_INVALID_ARGUMENT:
+      return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION:
+      return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY:
+      return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU:
+      return "unsupported CPU";
+    case RTC_ERROR_CANCELLED:
+      return "cancelled";
+    default:
+      return "unknown error";
+  }
+}

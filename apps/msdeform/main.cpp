@@ -69,6 +69,15 @@ bool thread_start_failed(const std::exception& e) {
   return std::string_view(e.what()).find("pthread_create") != std::string_view::npos;
 }
 
+// " under the address-space limit (ulimit -v) of N MB: raise the limit" after an "out of memory" where
+// such a limit is set (the likelier cause than the machine's memory), else "".
+std::string under_the_limit() {
+  rlimit limit;
+  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return {};
+  return " under the address-space limit (ulimit -v) of " + std::to_string(limit.rlim_cur >> 20) +
+         " MB: raise the limit";
+}
+
 }  // namespace
 
 std::optional<double> msd::cli::decimal_number(const std::string& text) {
@@ -131,10 +140,16 @@ int main(int argc, char** argv) {
     // --help and --version exit 0; a usage error (unknown option, bad value) exits 2, as other tools do.
     return app.exit(e) == 0 ? 0 : 2;
   } catch (const msd::Error& e) {
-    std::cerr << "msdeform: error: " << e.what() << "\n";
+    const std::string_view what = e.what();
+    std::cerr << "msdeform: error: " << what
+              << (what.find("out of memory") != std::string_view::npos &&
+                          what.find("ulimit") == std::string_view::npos
+                      ? under_the_limit()
+                      : "")
+              << "\n";
     return 1;
   } catch (const std::bad_alloc&) {
-    std::cerr << "msdeform: error: out of memory\n";
+    std::cerr << "msdeform: error: out of memory" << under_the_limit() << "\n";
     return 1;
   } catch (const std::filesystem::filesystem_error& e) {  // a path that cannot even be examined
     std::cerr << "msdeform: error: " << e.path1().string() << ": " << e.code().message() << "\n";

@@ -240,5 +240,13 @@ if ! ldd "$msdeform" | grep -q libasan; then
     [ $got = 0 ] || { [ $got = 1 ] && grep -q "raise the limit to at least" err.txt; } ||
       { cat err.txt; fail "deform under ulimit -v $limit exited $got"; }
   done
+  # Out of memory under such a limit says so (it said "out of memory", or Embree's "error 4").
+  for run in "deform --scene lift --resolution 100k --method laplacian -o limited.off" \
+             "compare --resolution 2k -o limited"; do
+    (ulimit -v 250000 && timeout 120 "$msdeform" $run >/dev/null 2>err.txt)
+    got=$?
+    [ $got = 1 ] && grep -q "out of memory.* under the address-space limit (ulimit -v) of 244 MB: raise the limit" err.txt ||
+      { cat err.txt; fail "$run under ulimit -v 250000 exited $got without naming the limit"; }
+  done
 fi
 echo "check_cli: passed"

@@ -106,30 +106,51 @@ void affine_targets(const Positions& rest, const std::vector<int>& constrained, 
 
 namespace {
 
-// A warning where zero-area triangles, which the cotan Laplacian leaves out, cut the surface: parts joined
-// only through them move as separate pieces under the methods built on it (a strip of 40 collapsed
-// triangles across a grid: one side stayed at rest while the other followed the handle, exit 0).
-std::string zero_area_cut_warning(const Positions& P, const Faces& F, const std::string& who) {
+// Warnings on triangles the cotan Laplacian cannot weigh as they are (core/laplacian.h):
+// - zero-area triangles, which it leaves out, where they cut the surface: parts joined only through them
+//   move as separate pieces under the methods built on it (a strip of 40 collapsed triangles across a
+//   grid: one side stayed at rest while the other followed the handle, exit 0);
+// - needles (a corner's cotangent above LaplaceOperator::kMaxCotangent) at a free vertex, whose weights
+//   it clamps: the vertices there are tied to their neighbours by weights that do not match the geometry
+//   (a one-ring squashed onto a line with its centre 1e-8 off it: the shell left the centre 0.16 behind
+//   its neighbours, exit 0). None of the survey's, libigl's or CGAL's meshes has one (the largest
+//   cotangent measured: 840, ChineseDragon-10kv).
+void degenerate_triangle_warnings(const Positions& P, const Faces& F, const Region& region,
+                                  const std::string& who, std::vector<std::string>& warnings) {
   Faces kept(F.rows(), 3);
   Eigen::Index rows = 0;
-  long degenerate = 0, first = -1;
+  long degenerate = 0, first = -1, needles = 0, first_needle = -1;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    if (triangle_cotangents(P.row(F(f, 0)), P.row(F(f, 1)), P.row(F(f, 2))).degenerate) {
+    const TriangleCotangents t = triangle_cotangents(P.row(F(f, 0)), P.row(F(f, 1)), P.row(F(f, 2)));
+    if (t.degenerate) {
       if (degenerate++ == 0) first = f;
-    } else {
-      kept.row(rows++) = F.row(f);
+      continue;
     }
+    kept.row(rows++) = F.row(f);
+    if (t.needle_corners > 0 &&
+        (region.code(F(f, 0)) == Region::kFree || region.code(F(f, 1)) == Region::kFree ||
+         region.code(F(f, 2)) == Region::kFree))
+      if (needles++ == 0) first_needle = f;
   }
-  if (degenerate == 0) return {};
+  if (needles > 0)
+    warnings.push_back(who + ": " + std::to_string(needles) +
+                       " needle triangle(s) at free vertices (the first is face " +
+                       std::to_string(first_needle) + ", vertices " + std::to_string(F(first_needle, 0)) +
+                       ", " + std::to_string(F(first_needle, 1)) + ", " + std::to_string(F(first_needle, 2)) +
+                       ") " + kNeedleWarning +
+                       ": methods built on it may leave the vertices there behind their "
+                       "neighbours; repair the mesh there");
+  if (degenerate == 0) return;
   kept.conservativeResize(rows, 3);
   const int nv = static_cast<int>(P.rows());
   const std::vector<int> whole = vertex_components(F, nv), cut = vertex_components(kept, nv);
   const int pieces = 1 + *std::max_element(whole.begin(), whole.end()),
             cut_pieces = cut.empty() ? 0 : 1 + *std::max_element(cut.begin(), cut.end());
-  if (cut_pieces <= pieces) return {};
-  return who + ": " + std::to_string(degenerate) + " zero-area triangle(s) (the first is face " + std::to_string(first) +
-         ") " + kZeroAreaCutWarning + " " + std::to_string(cut_pieces) + " pieces joined only through them; methods built on "
-         "the cotangent Laplacian leave such triangles out and move the pieces apart: repair the mesh there";
+  if (cut_pieces <= pieces) return;
+  warnings.push_back(who + ": " + std::to_string(degenerate) + " zero-area triangle(s) (the first is face " +
+                     std::to_string(first) + ") " + kZeroAreaCutWarning + " " + std::to_string(cut_pieces) +
+                     " pieces joined only through them; methods built on the cotangent Laplacian leave such "
+                     "triangles out and move the pieces apart: repair the mesh there");
 }
 
 }  // namespace
@@ -165,8 +186,7 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
     throw InvalidInput(name() + ": the region has no handle vertex (selection code 2 or higher); nothing to move");
   if (std::string torn = torn_edges_warning(F, region, name()); !torn.empty())
     prepare_warnings_.push_back(std::move(torn));
-  if (surface)
-    if (std::string cut = zero_area_cut_warning(P, F, name()); !cut.empty()) prepare_warnings_.push_back(std::move(cut));
+  if (surface) degenerate_triangle_warnings(P, F, region, name(), prepare_warnings_);
   try {
     do_prepare(P, F, region);
   } catch (const SolverError& e) {

@@ -58,15 +58,16 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
     throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on " + cause +
                       e.what());
   }
-  // B has S's outliers and S's region: Deformer::prepare has warned about their outliers, torn edges and
-  // zero-area cuts on S already.
+  // B has S's outliers and S's region: Deformer::prepare has warned about their outliers, torn edges,
+  // zero-area cuts and needles on S already.
   for (const std::string& w : base_deformer_->prepare_warnings()) {
     const auto said = [&](const char* what) {
       return w.find(what) != std::string::npos &&
              std::any_of(prepare_warnings_.begin(), prepare_warnings_.end(),
                          [&](const std::string& v) { return v.find(what) != std::string::npos; });
     };
-    if (!said(kOutlierWarning) && !said(kTornEdgesWarning) && !said(kZeroAreaCutWarning))
+    if (!said(kOutlierWarning) && !said(kTornEdgesWarning) && !said(kZeroAreaCutWarning) &&
+        !said(kNeedleWarning))
       prepare_warnings_.push_back(w);
   }
   encoding_->set_anchor_vertices(region.constrained_vertices());

@@ -698,31 +698,34 @@ FileContents read_contents(const std::string& path, const std::string& who) {
 }
 
 // Splits polygon corner[0 .. n) (n > 3) of `points` into n − 2 triangles that turn the polygon's way (their
-// normals along its Newell normal): a fan from the first corner where that fan does (convex polygons, most
-// non-planar quads: the fan keeps the file's faces as every mesh tool reads them), else ear clipping in the
-// plane of the Newell normal (a concave polygon, whose fan has a triangle turned over that overlaps the
-// others). A polygon whose corners lie on a line keeps its fan (its triangles are degenerate, which
-// check_surface reports).
-enum class PolygonSplit { Fan, EarClipped, CrossesItself };
+// normals along its Newell normal), judged in the plane of that normal by their shape, 2·area / longest
+// edge² (0.87 equilateral, 0 on a line):
+// - a fan from the first corner where its triangles all turn that way and none is a sliver next to the best
+//   fan's (convex polygons, most non-planar quads: the fan keeps the file's faces as every mesh tool reads
+//   them);
+// - else the fan from the corner whose triangles are best shaped: a polygon with a corner of nearly 180°
+//   (an edge split to mend a T-junction, two quads merged) gave a sliver along its neighbour's edges from
+//   its first corner, and the two polygons on either side of one such chain the same sliver twice (a
+//   non-manifold edge, or self-intersections on a curved mesh);
+// - else (a concave polygon without a fan that keeps it as drawn) ear clipping, the best-shaped ear first.
+// A polygon whose corners lie on a line keeps its fan (its triangles are degenerate, which check_surface
+// reports). Fans and ears are compared for polygons of up to kShapedCorners corners (quadratic in n);
+// larger ones take the first corner's fan or the first ear.
+enum class PolygonSplit { Fan, OtherFan, EarClipped, CrossesItself };
+constexpr int kShapedCorners = 64;
 PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, int n,
                            std::vector<std::array<int, 3>>& out) {
   Vec3 normal = Vec3::Zero();  // Newell: twice the vector area, whatever the first corner
   for (int k = 0; k < n; ++k) normal += points[corner[k]].cross(points[corner[(k + 1) % n]]);
-  const Vec3& p0 = points[corner[0]];
-  bool fan = true;
-  for (int k = 1; k + 1 < n && fan; ++k)
-    fan = (points[corner[k]] - p0).cross(points[corner[k + 1]] - p0).dot(normal) > 0;
   if (!(normal.squaredNorm() > 0)) {  // no area: all corners on a line, or lobes that cancel (a bow tie)
+    const Vec3& p0 = points[corner[0]];
     for (int k = 1; k + 1 < n; ++k)
       if ((points[corner[k]] - p0).cross(points[corner[k + 1]] - p0).squaredNorm() > 0)
         return PolygonSplit::CrossesItself;
-    fan = true;
-  }
-  if (fan) {
     for (int k = 1; k + 1 < n; ++k) out.push_back({corner[0], corner[k], corner[k + 1]});
     return PolygonSplit::Fan;
   }
-  // Ear clipping in the plane (u, v) with u × v along the normal, so the polygon runs counter-clockwise.
+  // The plane (u, v) with u × v along the normal, so the polygon runs counter-clockwise.
   const Vec3 u = normal.unitOrthogonal(), v = normal.normalized().cross(u);
   std::vector<Eigen::Vector2d> q(n);
   for (int k = 0; k < n; ++k) q[k] = {points[corner[k]].dot(u), points[corner[k]].dot(v)};
@@ -730,32 +733,56 @@ PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, i
     const Eigen::Vector2d e = q[b] - q[a], f = q[c] - q[a];
     return e.x() * f.y() - e.y() * f.x();
   };
+  const auto shape = [&](int a, int b, int c) {  // 2·area / longest edge², ≤ 0 where turned over or flat
+    const double longest =
+        std::max({(q[b] - q[a]).squaredNorm(), (q[c] - q[b]).squaredNorm(), (q[a] - q[c]).squaredNorm()});
+    const double t = turn(a, b, c);
+    return t > 0 ? t / longest : 0.0;
+  };
+  const auto fan_shape = [&](int apex) {  // the worst triangle of the fan from corner apex (0: no fan)
+    double worst = 1;
+    for (int k = 1; k + 1 < n && worst > 0; ++k)
+      worst = std::min(worst, shape(apex, (apex + k) % n, (apex + k + 1) % n));
+    return worst;
+  };
+  const double first = fan_shape(0);
+  double best = first;
+  int apex = 0;
+  for (int k = 1; k < n && n <= kShapedCorners; ++k)
+    if (const double s = fan_shape(k); s > best) best = s, apex = k;
+  if (first > 0 && first >= 0.1 * best) apex = 0;
+  if (best > 0) {
+    for (int k = 1; k + 1 < n; ++k)
+      out.push_back({corner[apex], corner[(apex + k) % n], corner[(apex + k + 1) % n]});
+    return apex == 0 ? PolygonSplit::Fan : PolygonSplit::OtherFan;
+  }
   std::vector<int> left(n);
   std::iota(left.begin(), left.end(), 0);
-  const size_t first = out.size();
+  const size_t start = out.size();
   while (left.size() > 3) {
     const int m = static_cast<int>(left.size());
-    bool clipped = false;
-    for (int i = 0; i < m && !clipped; ++i) {
+    int ear = -1;
+    double ear_shape = 0;
+    for (int i = 0; i < m && (ear < 0 || m <= kShapedCorners); ++i) {
       const int a = left[(i + m - 1) % m], b = left[i], c = left[(i + 1) % m];
-      if (!(turn(a, b, c) > 0)) continue;  // a reflex or straight corner is no ear
-      bool empty = true;                   // no other corner inside or on the ear
+      const double s = shape(a, b, c);
+      if (!(s > ear_shape)) continue;  // a reflex or straight corner is no ear; a better one is known
+      bool empty = true;               // no other corner inside or on the ear
       for (int j : left)
         if (j != a && j != b && j != c && q[j] != q[a] && q[j] != q[b] && q[j] != q[c] &&
             turn(a, b, j) >= 0 && turn(b, c, j) >= 0 && turn(c, a, j) >= 0)
           empty = false;
-      if (!empty) continue;
-      out.push_back({corner[a], corner[b], corner[c]});
-      left.erase(left.begin() + i);
-      clipped = true;
+      if (empty) ear = i, ear_shape = s;
     }
-    if (!clipped) {
-      out.resize(first);
+    if (ear < 0) {
+      out.resize(start);
       return PolygonSplit::CrossesItself;
     }
+    out.push_back({corner[left[(ear + m - 1) % m]], corner[left[ear]], corner[left[(ear + 1) % m]]});
+    left.erase(left.begin() + ear);
   }
   if (!(turn(left[0], left[1], left[2]) > 0)) {
-    out.resize(first);
+    out.resize(start);
     return PolygonSplit::CrossesItself;
   }
   out.push_back({corner[left[0]], corner[left[1]], corner[left[2]]});
@@ -806,6 +833,7 @@ TriangleSoup triangulate(const FileContents& soup, const std::string& path, cons
                          " corners that crosses itself (in the plane of its normal): no split into triangles "
                          "keeps it as drawn; split it into triangles or simple polygons in the modeller");
     report.concave_polygons += split == PolygonSplit::EarClipped;
+    report.polygons_fanned_elsewhere += split == PolygonSplit::OtherFan;
   }
   // Duplicates: sort the vertex sets, keep the first triangle of each.
   std::vector<std::array<int, 4>> keys(triangles.size());

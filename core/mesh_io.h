@@ -10,10 +10,14 @@ namespace msd {
 
 //! What loading did to the file's faces. The file's vertices are never changed, added or reordered.
 struct LoadReport {
-  //! Faces with more than 3 corners, split into triangles: fans from their first corner, or for a concave
-  //! polygon (whose fan would turn a triangle over) by ear clipping in the plane of its normal.
+  //! Faces with more than 3 corners, split into triangles: fans from their first corner (from the corner
+  //! whose fan is best shaped where the first corner's has a sliver: a corner of nearly 180°), or for a
+  //! concave polygon (whose fans would turn a triangle over) by ear clipping in the plane of its normal.
   int polygons_triangulated = 0;
   int concave_polygons = 0;          //!< of those, the ones split by ear clipping
+  //! Of those, the ones split into a fan from another corner than the first (whose fan has a sliver, or a
+  //! triangle turned over where the polygon is concave).
+  int polygons_fanned_elsewhere = 0;
   int degenerate_faces_skipped = 0;  //!< faces that repeat a vertex index (dropped)
   int duplicate_faces_dropped = 0;   //!< triangles with the vertex set of an earlier one (dropped)
   int faces_flipped = 0;             //!< load_mesh: triangles turned over to agree with their neighbours

@@ -141,7 +141,7 @@ TEST_CASE("a concave polygon is split into triangles that cover it once, a conve
   REQUIRE(concave.F.rows() == 3);
   check_cover(concave, 2.5);  // the square of side 2 less the notch (area 1.5)
   CHECK(report.polygons_triangulated == 1);
-  CHECK(report.concave_polygons == 1);
+  CHECK(report.polygons_fanned_elsewhere == 1);  // from its reflex corner
   // Every start: the reflex corner first, last, in the middle; and an L of eight corners (area 3).
   for (int shift = 0; shift < 5; ++shift) {
     std::string face = "f";
@@ -170,6 +170,36 @@ TEST_CASE("a concave polygon is split into triangles that cover it once, a conve
     CHECK_THROWS_WITH(load_soup(tmp.file("bowtie.off")),
                       Contains("bowtie.off line 7: face 0 is a polygon of 4 corners that crosses itself"));
   }
+}
+
+TEST_CASE("polygons with a corner of nearly 180 degrees split without slivers", "[core][io]") {
+  // Break test: two hexagons (3 x 2 corners each) sharing the chain 4-5-6, its middle raised by 0.05. The
+  // fan from the first corner has a flat triangle, and ear clipping cut the nearly straight corner 5 off
+  // both hexagons: the same sliver twice, one dropped as a duplicate, edge (3, 5) in three faces, the mesh
+  // refused. On a curved mesh of quads and merged quads such slivers overlapped (12 self-intersections).
+  test::TempDir tmp;
+  for (const double lift : {0.05, -0.05, 1e-6}) {
+    std::ofstream(tmp.file("hex2.obj"))
+        << "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 " << lift
+        << "\nv 2 1 0\nv 0 2 0\nv 1 2 0\nv 2 2 0\nf 1 2 3 6 5 4\nf 4 5 6 9 8 7\n";
+    INFO("middle corner raised by " << lift);
+    LoadReport report;
+    TriangleSoup soup = load_soup(tmp.file("hex2.obj"), &report);
+    REQUIRE(soup.F.rows() == 8);
+    CHECK(report.duplicate_faces_dropped == 0);
+    CHECK(check_surface(soup.P, soup.F).problem().empty());
+    for (Eigen::Index f = 0; f < soup.F.rows(); ++f) {
+      const Vec3 p0 = soup.P.row(soup.F(f, 0)), p1 = soup.P.row(soup.F(f, 1)), p2 = soup.P.row(soup.F(f, 2));
+      INFO("triangle " << f);
+      CHECK((p1 - p0).cross(p2 - p0).z() >= 0.99);  // twice the area: every triangle a half square
+    }
+  }
+  // A convex quad keeps its first corner's fan even when the other diagonal is a little better.
+  std::ofstream(tmp.file("quad.obj")) << "v 0 0 0\nv 1 0 0\nv 1.2 1 0\nv 0 1 0\nf 1 2 3 4\n";
+  const TriangleSoup quad = load_soup(tmp.file("quad.obj"));
+  REQUIRE(quad.F.rows() == 2);
+  CHECK(quad.F.row(0) == Eigen::RowVector3i(0, 1, 2));
+  CHECK(quad.F.row(1) == Eigen::RowVector3i(0, 2, 3));
 }
 
 TEST_CASE("two triangles wound against each other keep the file's 4 vertices, one face turned over",

@@ -138,6 +138,13 @@ def _mask(selector, V, what):
     bad = a[(a < 0) | (a >= n)]
     if bad.size:
         raise ValueError(f"{what}: vertex index {int(bad[0])} is out of range [0, {n})")
+    # An integer 0/1 mask (np.where(c, 1, 0), a mask read from text) would select vertices 0 and 1 only.
+    values, counts = np.unique(a, return_counts=True)
+    if counts.max() > 1:
+        hint = (f"; an integer array of length {n} holding only 0 and 1 looks like a mask: pass it as "
+                f"booleans ({what.split('[')[0]}=mask.astype(bool))" if a.shape == (n,) and values.max() <= 1 else "")
+        raise ValueError(f"{what}: vertex index {int(values[counts.argmax()])} appears {int(counts.max())} times "
+                         f"(an index array lists each vertex once){hint}")
     mask[a] = True
     return mask
 
@@ -152,8 +159,8 @@ def region(V, fixed=None, handles=(), others="free"):
     are, 'free' (default) or 'fixed'.
 
     Raises ValueError when a handle selects nothing, a vertex is selected twice (fixed and a handle, or
-    two handles), an index is out of range or a mask has the wrong length; TypeError for a selector of
-    another kind."""
+    two handles, or twice in one index array: an integer 0/1 mask is not a mask), an index is out of range
+    or a mask has the wrong length; TypeError for a selector of another kind."""
     V = np.asarray(V)
     if V.ndim != 2 or V.shape[1] != 3:
         raise ValueError(f"V must have shape (N, 3), got shape {V.shape}")

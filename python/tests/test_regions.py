@@ -44,6 +44,13 @@ def test_region_errors(lift):
         msdeform.region(V, handles=[np.array([0.5])])
     with pytest.raises(ValueError, match=r"shape \(N, 3\)"):
         msdeform.region(V[:, :2])
+    # An integer 0/1 mask fixed vertices 0 and 1 only (break test: 2 of 328), without a word.
+    for dtype in (int, np.uint8):
+        with pytest.raises(ValueError, match=r"fixed: vertex index [01] appears \d+ times .*looks like a mask: pass it "
+                                             r"as booleans \(fixed=mask.astype\(bool\)\)"):
+            msdeform.region(V, fixed=(V[:, 0] < 0.2).astype(dtype), handles=[V[:, 0] > 0.8])
+    with pytest.raises(ValueError, match=r"handles\[0\]: vertex index 3 appears 2 times \(an index array lists each vertex once\)$"):
+        msdeform.region(V, handles=[[3, 4, 3]])
 
 
 def test_selection_helpers_match_numpy(lift):

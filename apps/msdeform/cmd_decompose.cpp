@@ -31,7 +31,7 @@ void add_decompose_command(CLI::App& app) {
   auto edit = std::make_shared<EditCaseOptions>();
   auto decomposition = std::make_shared<DecompositionArgs>();
   auto output = std::make_shared<std::string>();
-  edit->add_to(*cmd);
+  edit->add_to(*cmd, /*with_transforms=*/false);
   decomposition->add_to(*cmd);
   cmd->add_option("-o,--output", *output,
                   "Base mesh to write, .ply: a per-vertex property 'detail' holds the signed normal-displacement "

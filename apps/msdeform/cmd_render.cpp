@@ -25,7 +25,7 @@ void add_render_command(CLI::App& app) {
   auto color = std::make_shared<std::string>("auto");
   auto size = std::make_shared<std::vector<int>>(std::vector<int>{800, 600});
   auto detail_scale = std::make_shared<double>(0);
-  edit->add_to(*cmd);
+  edit->add_to(*cmd, /*with_transforms=*/false);
   camera->add_to(*cmd);
   auto rest = std::make_shared<std::string>();
   cmd->add_option("--color", *color,

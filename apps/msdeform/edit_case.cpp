@@ -10,22 +10,23 @@
 
 namespace msd::cli {
 
-void EditCaseOptions::add_to(CLI::App& cmd) {
+void EditCaseOptions::add_to(CLI::App& cmd, bool with_transforms) {
   auto* mesh_opt = cmd.add_option(
       "mesh", mesh, "Mesh file (.off .obj .ply .stl); soups and point clouds for space methods");
   auto* sel_opt =
       cmd.add_option("--sel", sel, "Region: .sel (0 fixed, 1 free, 2+k handle k) or .dmat groups (-1 free, k handle k)");
-  auto* def_opt = cmd.add_option("--def", def, "Handle transforms: .def, one 4x4 matrix per handle");
   // A scene brings its own region and transforms: files given with it would be silently ignored.
-  cmd.add_option("--scene", scene, "Built-in scene instead of files (it has its own region and transforms): lift, "
-                                   "bend120, twist135, bar-lift, bar-bend120, bar-twist135, crease120 (Fig. 9.10)")
-      ->excludes(mesh_opt)
-      ->excludes(sel_opt)
-      ->excludes(def_opt);
+  auto* scene_opt =
+      cmd.add_option("--scene", scene, "Built-in scene instead of files (it has its own region and transforms): lift, "
+                                       "bend120, twist135, bar-lift, bar-bend120, bar-twist135, crease120 (Fig. 9.10)")
+          ->excludes(mesh_opt)
+          ->excludes(sel_opt);
+  if (with_transforms)
+    scene_opt->excludes(cmd.add_option("--def", def, "Handle transforms: .def, one 4x4 matrix per handle"));
   cmd.add_option("--resolution", resolution, "Approximate vertex count of a built-in scene (e.g. 10k, 100k, 1M)")
       ->capture_default_str();
   cmd.add_flag("--force", force, "Let an output replace one of the input files (refused otherwise)");
-  region.add_to(cmd);
+  region.add_to(cmd, with_transforms);
 }
 
 void EditCaseOptions::check_output(const std::string& output, const char* option,
@@ -70,9 +71,6 @@ EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {
     c = scene_case(scene, parse_resolution(resolution));
   } else {
     if (mesh.empty()) throw InvalidInput("give a mesh file with a region (--sel, or --fixed / --handle), or a built-in --scene");
-    if (!need_transforms && !def.empty())  // it would be read for nothing, and the user think it used
-      throw InvalidInput("--def " + def +
-                         ": this command applies no handle transforms (deform, compare and view do)");
     if (!sel.empty() && built_region) throw InvalidInput("give the region by --sel or by --fixed / --handle, not both");
     if (!def.empty() && built_transforms)
       throw InvalidInput("give the transforms by --def or by --translate / --rotate / --scale, not both");

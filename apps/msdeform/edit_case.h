@@ -16,7 +16,9 @@ struct EditCaseOptions {
   std::string mesh, sel, def, scene, resolution = "10k";
   bool force = false;  // --force: an output may replace an input file
   RegionOptions region;  // --fixed, --handle, --translate, ...: the region and transforms without files
-  void add_to(CLI::App& cmd);
+  // with_transforms: also --def and the transform options (RegionOptions::add_to); the commands that apply
+  // no handle transforms (decompose, render) leave them out.
+  void add_to(CLI::App& cmd, bool with_transforms = true);
   // Before any work: output (named by option, e.g. "-o") has a known mesh format and can be written
   // (check_writable), and is none of the inputs (the edit's files and other_inputs) unless --force.
   // Warns that an STL output will not keep the input's vertices. Throws InvalidInput naming the option

@@ -78,6 +78,26 @@ std::string under_the_limit() {
          " MB: raise the limit";
 }
 
+// "--def is not an option of decompose (deform, compare, view take it)" for the first option on the command
+// line that the chosen subcommand lacks and others have (CLI11 says only "The following arguments were
+// not expected"), else "".
+std::string misplaced_option(CLI::App& app, int argc, char** argv) {
+  const std::vector<CLI::App*> chosen = app.get_subcommands();
+  if (chosen.size() != 1) return {};
+  for (int i = 2; i < argc && std::string_view(argv[i]) != "--"; ++i) {
+    const std::string arg = argv[i], name = arg.substr(0, arg.find('='));
+    if (name.size() < 3 || name.rfind("--", 0) != 0 || chosen[0]->get_option_no_throw(name)) continue;
+    std::string others;
+    for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+      if (sub != chosen[0] && sub->get_option_no_throw(name))
+        others += (others.empty() ? "" : ", ") + sub->get_name();
+    if (!others.empty())
+      return name + " is not an option of " + chosen[0]->get_name() + " (" + others + " take" +
+             (others.find(',') == std::string::npos ? "s" : "") + " it)";
+  }
+  return {};
+}
+
 }  // namespace
 
 std::optional<double> msd::cli::decimal_number(const std::string& text) {
@@ -137,6 +157,11 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    if (const std::string hint = misplaced_option(app, argc, argv);
+        dynamic_cast<const CLI::ExtrasError*>(&e) && !hint.empty()) {
+      std::cerr << hint << "\nRun with --help or --help-all for more information.\n";
+      return 2;
+    }
     // --help and --version exit 0; a usage error (unknown option, bad value) exits 2, as other tools do.
     return app.exit(e) == 0 ? 0 : 2;
   } catch (const msd::Error& e) {

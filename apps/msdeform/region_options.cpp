@@ -127,8 +127,10 @@ std::vector<int> select(const std::string& option, const std::string& spec, cons
 
 }  // namespace
 
-void RegionOptions::add_to(CLI::App& cmd) {
-  auto* g = cmd.add_option_group("region", "Regions and transforms without files (instead of --sel / --def)");
+void RegionOptions::add_to(CLI::App& cmd, bool with_transforms) {
+  auto* g = cmd.add_option_group("region", with_transforms
+                                               ? "Regions and transforms without files (instead of --sel / --def)"
+                                               : "Regions without files (instead of --sel)");
   group_ = g;
   auto add = [&](const char* name, std::vector<std::string>& values, const char* type, const char* help) {
     // One value per occurrence. CLI11 takes the next word even when it is an option ("--handle --translate
@@ -148,6 +150,8 @@ void RegionOptions::add_to(CLI::App& cmd) {
                "Fixed vertices: box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX | sphere:X,Y,Z,R | halfspace:NX,NY,NZ,D (n.p < d) | "
                "vertex:ID,RINGS | file:PATH[,VALUE]; repeatable, later selections win");
   handle_ = add("--handle", handle_values_, "SPEC", "The next handle, selected like --fixed; repeat for several handles");
+  g->add_option("--write-sel", write_sel, "Save the region (built or loaded) as a .sel file");
+  if (!with_transforms) return;
   translate_ = add("--translate", translate_values_, "X,Y,Z",
                    "Translate the handle this follows (before any --handle: every handle)");
   rotate_ = add("--rotate", rotate_values_, "AX,AY,AZ,DEG", "Rotate by DEG degrees about the axis, like --translate");
@@ -155,7 +159,6 @@ void RegionOptions::add_to(CLI::App& cmd) {
   about_ = add("--about", about_values_, "X,Y,Z|handle-centroid",
                "Centre of the --rotate or --scale right before it (default: the handle's centroid where the "
                "transforms before put it)");
-  g->add_option("--write-sel", write_sel, "Save the region (built or loaded) as a .sel file");
   g->add_option("--write-def", write_def, "Save the handle transforms (built or loaded) as a .def file");
 }
 

@@ -23,7 +23,9 @@ namespace msd::cli {
 struct RegionOptions {
   std::string write_sel, write_def;
 
-  void add_to(CLI::App& cmd);
+  // with_transforms: also --translate, --rotate, --scale, --about and --write-def (the commands that apply
+  // handle transforms; the others do not offer them).
+  void add_to(CLI::App& cmd, bool with_transforms = true);
   bool builds_region() const;      // a --fixed or --handle was given
   bool builds_transforms() const;  // a --translate, --rotate, --scale or --about was given
   std::vector<std::string> input_files() const;  // the files of file: selections (never to be overwritten)

@@ -52,7 +52,11 @@ expect_error 2 "--bogus" "$msdeform" deform --scene lift --bogus -o x.off
 # "--kb=" with nothing after '=': CLI11 would read the next argument as its value and blame that.
 expect_error 2 "--kb=: no value after '='" "$msdeform" deform --scene lift --kb= --ks 1 -o x.off
 expect_error 2 "unknown subcommand 'foo'; the subcommands are info, scene, deform" "$msdeform" foo
-expect_error 1 "--def lift.def: this command applies no handle transforms" "$msdeform" decompose lift.off --def lift.def -o b.ply
+# decompose and render apply no transforms and offer no options for them (decompose's help listed them,
+# and a --translate given with a region was ignored).
+expect_error 2 "--def is not an option of decompose (deform, compare, view take it)" "$msdeform" decompose lift.off --def lift.def -o b.ply
+expect_error 2 "--translate is not an option of render (deform, compare, view take it)" \
+  "$msdeform" render lift.off --sel lift.sel --translate=0,0,1 -o b.png
 # An output path that is an existing folder without an extension said "unknown format ''".
 mkdir -p out-folder
 expect_error 1 "out-folder is a folder; give a mesh file name" "$msdeform" deform --scene lift -o out-folder

@@ -249,7 +249,7 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
                            " degrees, half a turn or more. A handle's transform is a matrix, which keeps a rotation "
                            "only up to whole turns (190 degrees is the transform of -170, +180 that of -180), so "
                            "methods that blend rotations could turn the other way round; give less than 180 "
-                           "degrees in total per handle (a scale by two negative factors is a half turn)");
+                           "degrees in total per handle (a scale by two or three negative factors holds a half turn)");
       }
     }
   };
@@ -282,7 +282,9 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
       const auto v = numbers(option, s.value, {1, 3}, "S or SX,SY,SZ");
       const Vec3 factors = v.size() == 1 ? Vec3::Constant(v[0]) : vec(v);
       if (!(factors.array().abs() > 0).all()) throw InvalidInput(option + ": a scale factor is zero");
-      if ((factors.array() < 0).count() == 2) add_turn(180, option);  // e.g. -1,-1,1: a half turn about z
+      // -1,-1,1 is a half turn about z; -1 (all three) a half turn and a mirror, which methods that take a
+      // transform's rotation (its polar part, determinant made +1) read as that half turn.
+      if ((factors.array() < 0).count() >= 2) add_turn(180, option);
       M.topLeftCorner<3, 3>() = factors.asDiagonal();
     }
     // A rotation or scale is about the point of the --about right after it, else the handle's centroid.

@@ -71,7 +71,10 @@ _AXES = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 def rotation(axis, degrees, about=None):
     """The 4x4 float64 rotation by `degrees` (counter-clockwise looking down the axis, right-hand rule)
     about `axis` ('x', 'y', 'z' or 3 numbers, any length but zero) through the point `about`
-    (3 numbers, mesh units; default the origin)."""
+    (3 numbers, mesh units; default the origin). A matrix keeps a rotation only up to whole turns:
+    270 degrees gives the matrix of -90, and methods that blend rotations (propagate, gradient, ARAP's
+    start) turn the handle the short way round; Deformer.deform warns at a half turn, whose way round is
+    not defined. Compose turns of under 180 degrees per handle and frame for a longer path."""
     if isinstance(axis, str):
         if axis.lower() not in _AXES:
             raise ValueError(f"axis must be 'x', 'y', 'z' or a 3-vector, got {axis!r}")

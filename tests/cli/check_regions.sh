@@ -162,7 +162,8 @@ expect_error 1 "the vertex id must be an integer in [0," \
 expect_error 1 "unknown selection 'cube'" "$msdeform" deform lift.off --handle cube:1 --translate 0,0,1 -o x.off
 # A handle's transform keeps a rotation only up to whole turns: more than half a turn per handle is refused
 # (190 degrees gave the -170 degree transform, and methods that blend rotations twisted the other way).
-# +180 and -180 are one matrix too, and a scale by two negative factors is a half turn.
+# +180 and -180 are one matrix too, and a scale by two negative factors is a half turn, by three a half turn
+# and a mirror (-1 was accepted, -1,-1,1 refused).
 expect_error 1 "add up to 1e+80 degrees, half a turn or more" \
   "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,1,0,1e80 -o x.off
 expect_error 1 "the turns of handle 0 add up to 190 degrees" \
@@ -173,6 +174,8 @@ expect_error 1 "--rotate 1,0,0,100: the turns of handle 1 add up to 200 degrees"
   "$msdeform" deform lift.off --handle vertex:0,1 --handle vertex:40,1 --rotate 0,1,0,100 --rotate 1,0,0,100 -o x.off
 expect_error 1 "--scale -1,-1,1: the turns of handle 0 add up to 180 degrees" \
   "$msdeform" deform lift.off --handle vertex:0,1 --scale -1,-1,1 --rotate 0,0,1,90 -o x.off
+expect_error 1 "--scale -1: the turns of handle 0 add up to 180 degrees" \
+  "$msdeform" deform lift.off --handle vertex:0,1 --scale -1 -o x.off
 expect_error 1 "add up to 180.0001 degrees" \
   "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,0,1,179.9999 --rotate 0,0,1,0.0002 -o x.off
 "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,1,0,179 --method shell -o turned.off >/dev/null 2>&1 ||

@@ -188,20 +188,29 @@ void add_deform_command(CLI::App& app) {
     if (report.folded_faces >= 0)
       std::printf("  folded triangles (normal turned against the deformed base's): %d\n", report.folded_faces);
     ShapeChange shape = shape_change(rest, out, c.F, c.region);
+    const bool has_free = !c.region.free_vertices().empty();
     if (c.weld && shape.largest_vertex >= 0) shape.largest_vertex = c.weld->file_vertex(shape.largest_vertex);
     if (shape.edges > 0) {
       // No vertex when no edge changed length at all (the largest factor is then 1).
       const std::string at =
           shape.largest_vertex >= 0 ? ", at vertex " + std::to_string(shape.largest_vertex) : std::string();
-      std::printf("  shape: %.3g %% of the free region's edges changed length beyond 1.5x (the most %.3gx%s), "
-                  "its area x%.3g", 100 * shape.stretched_share, shape.largest_factor, at.c_str(), shape.area_ratio);
+      // Without a free vertex the edges measured are those between differently placed vertices only.
+      if (!has_free)
+        std::printf("  shape: %.3g %% of the edges between vertices placed by different transforms (no vertex is "
+                    "free) changed length beyond 1.5x (the most %.3gx%s)",
+                    100 * shape.stretched_share, shape.largest_factor, at.c_str());
+      else
+        std::printf("  shape: %.3g %% of the free region's edges changed length beyond 1.5x (the most %.3gx%s), "
+                    "its area x%.3g",
+                    100 * shape.stretched_share, shape.largest_factor, at.c_str(), shape.area_ratio);
       if (shape.volume_change) std::printf(", volume %+.3g %%", 100 * *shape.volume_change);
       std::printf("\n");
     }
     for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
       for (const std::string& w : *list) std::fprintf(stderr, "warning: %s\n", in_file_numbering(w).c_str());
     const bool scales = edit_scales(c.transforms);  // asks for area and volume to change
-    if (const std::string w = shape_change_warning(shape, scales); !w.empty())
+    // Without a free vertex the prepare warning on torn edges says why they stretch.
+    if (const std::string w = has_free ? shape_change_warning(shape, scales) : std::string(); !w.empty())
       std::fprintf(stderr, "warning: %s%s\n", w.c_str(),
                    deformer->name() == "arap" ? "; more ARAP iterations or a larger fixed region may help"
                                               : "; arap keeps the proportions best");

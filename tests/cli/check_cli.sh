@@ -116,6 +116,15 @@ grep -q "warning: the result does not keep the shape's proportions: an edge at v
   { cat err.txt; fail "the shell's torn bend was not warned about"; }
 "$msdeform" deform --scene bend120 --resolution 2k --method arap -o a.off >out.txt 2>err.txt || fail "arap bend"
 grep -q "proportions" err.txt && { cat err.txt; fail "ARAP's bend was warned about"; }
+# With no free vertex the shape line spoke of "100 % of the free region's edges", and the warning blamed
+# large rotations rather than the missing free region (which the prepare warning names).
+"$msdeform" scene lift --resolution 2k -o nofree >/dev/null
+"$msdeform" deform nofree/lift.off --fixed box:-1,-1,-1,0.5,2,2 --handle box:0.5,-1,-1,2,2,2 --translate 0,0,0.1 \
+  -o nofree.off >out.txt 2>err.txt || fail "deform without a free vertex"
+grep -q "shape: 100 % of the edges between vertices placed by different transforms (no vertex is free)" out.txt ||
+  { cat out.txt; fail "the shape line without a free vertex"; }
+grep -q "the region has no free vertex" err.txt && ! grep -q "proportions" err.txt ||
+  { cat err.txt; fail "the warnings without a free vertex"; }
 # decompose: a vertex no face uses has no detail (its height was the distance to some other part of B).
 printf 'OFF\n9 12 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n5 5 5\n3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n3 1 2 6\n3 1 6 5\n3 2 3 7\n3 2 7 6\n3 3 0 4\n3 3 4 7\n' >cube-stray.off
 "$msdeform" decompose cube-stray.off -o cube-stray.ply >out.txt 2>err.txt || { cat err.txt; fail "decompose with an unused vertex"; }

@@ -477,6 +477,7 @@ void ArapDeformer::run(const Positions& targets, Positions& out) {
   for (long k = 0; k < nu; ++k)
     for (int d = 0; d < 3; ++d) u_[d * nu + k] = x_(unknown_[k], d);
   double energy;
+  frame_report_.start = "cold start";
   if (cold_) {
     cold_start(targets);
     energy = local_step();
@@ -490,9 +491,10 @@ void ArapDeformer::run(const Positions& targets, Positions& out) {
       u_ = warm_;
       scatter(u_);
       energy = local_step();
+      frame_report_.start = guess_ ? "initial guess" : "last result";
     }
   }
-  cold_ = false;
+  cold_ = guess_ = false;
   energies_.clear();
   energies_.push_back(energy);
   history_ = next_column_ = 0;
@@ -545,6 +547,7 @@ void ArapDeformer::do_deform_to(const Positions& targets, Positions& out) { run(
 void ArapDeformer::do_set_initial_guess(const Positions& X) {
   x_ = X;
   cold_ = false;
+  guess_ = true;
 }
 
 void ArapDeformer::do_reset() {
@@ -553,6 +556,7 @@ void ArapDeformer::do_reset() {
   std::fill(quaternion_.begin(), quaternion_.end(), Eigen::Vector4d(0, 0, 0, 1));
   energies_.clear();
   cold_ = true;
+  guess_ = false;
 }
 
 }  // namespace msd

@@ -146,6 +146,7 @@ class ArapDeformer : public Deformer {
   Eigen::MatrixXd handle_field_;                   // #V by #handles harmonic weights
   std::vector<Eigen::Vector4d> handle_quaternion_;  // per handle, this frame (x, y, z, w)
   bool cold_ = true;
+  bool guess_ = false;  // x_ holds set_initial_guess()'s X (else the last result)
   int clamped_weights_ = 0;
   double local_seconds_ = 0, global_seconds_ = 0;
 };

@@ -219,6 +219,7 @@ void Deformer::begin_frame(Positions& out) {
   frame_report_.converged = true;
   frame_report_.folded_faces = -1;
   frame_report_.constraint_error = -1;
+  frame_report_.start = nullptr;
   frame_report_.warnings.clear();
   output_checked_finite_ = false;
 }

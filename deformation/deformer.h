@@ -60,6 +60,10 @@ struct FrameReport {
   //! Largest distance of a constrained vertex from its target (measured by methods that do not meet the
   //! constraints exactly; −1: not measured).
   double constraint_error = -1;
+  //! Iterative methods that choose their start (ARAP): "last result", "initial guess" (set_initial_guess()'s
+  //! X) or "cold start" (one global step with the handles' blended rotations), whichever had the lower
+  //! energy; a guess above the cold start's energy is not used. nullptr where the method has one start.
+  const char* start = nullptr;
   //! What the user should know about this frame (folds, no convergence), each naming a remedy. Empty in
   //! a clean frame (clearing it allocates nothing).
   std::vector<std::string> warnings;
@@ -100,7 +104,7 @@ class Deformer {
   void deform_to(const Positions& targets, Positions& out);
 
   //! Methods with traits().initial_guess: the next frame starts from X (#V by 3) instead of the last
-  //! frame's result. \throw UsageError for other methods, before prepare, or for a wrong shape;
+  //! frame's result (ARAP only where X's energy is below its cold start's: FrameReport::start says). \throw UsageError for other methods, before prepare, or for a wrong shape;
   //! InvalidInput if X is not finite.
   void set_initial_guess(const Positions& X);
   //! Back to the rest pose: the next frame of an iterative method starts from rest, a space method's map

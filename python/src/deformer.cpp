@@ -724,6 +724,11 @@ void bind_deformer(py::module_& m) {
           "constraint_error", [](const msd::FrameReport& r) { return not_measured(r.constraint_error); },
           "largest distance of a constrained vertex from its target (mesh units), measured by methods with "
           "inexact constraints; None when not measured")
+      .def_property_readonly(
+          "start",
+          [](const msd::FrameReport& r) { return r.start ? py::object(py::str(r.start)) : py::object(py::none()); },
+          "iterative methods that choose their start (arap): 'last result', 'initial guess' (set_initial_guess) or "
+          "'cold start', whichever had the lower energy; None where the method has one start")
       .def_readonly("warnings", &msd::FrameReport::warnings, "what the user should know, each naming a remedy")
       .def("__repr__", [](const msd::FrameReport& r) {
         return "FrameReport(iterations=" + std::to_string(r.iterations) +
@@ -731,7 +736,7 @@ void bind_deformer(py::module_& m) {
                ", converged=" + (r.converged ? "True" : "False") + ", folded_faces=" +
                (r.folded_faces < 0 ? std::string("None") : std::to_string(r.folded_faces)) +
                ", constraint_error=" + std::string(py::repr(not_measured(r.constraint_error))) +
-               ", warnings=" + std::to_string(r.warnings.size()) + ")";
+               ", start=" + (r.start ? "'" + std::string(r.start) + "'" : std::string("None")) + ", warnings=" + std::to_string(r.warnings.size()) + ")";
       });
 
   py::class_<PyDeformer>(m, "Deformer", kDeformerDoc)
@@ -826,7 +831,8 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
           },
           py::arg("X"),
           "Iterative methods with traits.initial_guess: the next frame starts from X ((#V, 3) float64, copied) "
-          "instead of the last result. Raises msdeform.UsageError (RuntimeError) for other methods or before "
+          "instead of the last result; arap takes X only where its energy is below its cold start's "
+          "(frame_report.start says which start it took). Raises msdeform.UsageError (RuntimeError) for other methods or before "
           "prepare(), ValueError for a wrong shape or a non-finite value.")
       .def(
           "reset",

@@ -357,10 +357,18 @@ def test_initial_guess_and_reset(lift):
     assert arap.traits.initial_guess and arap.traits.solve == "iterative"
     solved = arap.deform(transforms)
     cold = arap.frame_report.iterations
+    assert arap.frame_report.start == "cold start"
     arap.set_initial_guess(solved)
     again = arap.deform(transforms)
     assert arap.frame_report.iterations < cold
+    assert arap.frame_report.start == "initial guess"
     np.testing.assert_allclose(again, solved, rtol=0, atol=1e-4 * diagonal(V))
+    arap.deform(transforms)
+    assert arap.frame_report.start == "last result"
+    # A guess above the cold start's energy is not used, and the report says so (it was silent).
+    arap.set_initial_guess(V * 1000)
+    arap.deform(transforms)
+    assert arap.frame_report.start == "cold start" and "start='cold start'" in repr(arap.frame_report)
     arap.reset()
     assert arap.frame_report.iterations == 0
     with pytest.raises(ValueError, match="X has 3 rows"):

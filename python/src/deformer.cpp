@@ -23,6 +23,28 @@
 namespace msdpy {
 namespace {
 
+// propagate's transfer function given as a Python callable. Holds the GIL around each call (prepare calls it
+// from the solver's threads) and where the last copy lets the callable go; options returns the callable
+// itself. A result that is no number is a TypeError naming the option rather than pybind11's cast error.
+struct PythonTransfer {
+  std::shared_ptr<py::object> callable;
+  explicit PythonTransfer(py::handle f)
+      : callable(new py::object(py::reinterpret_borrow<py::object>(f)), [](py::object* o) {
+          py::gil_scoped_acquire gil;
+          delete o;
+        }) {}
+  double operator()(double x) const {
+    py::gil_scoped_acquire gil;
+    py::object y = (*callable)(x);
+    try {
+      return y.cast<double>();
+    } catch (const py::cast_error&) {
+      throw py::type_error("option transfer: the callable must return a number, t(" + std::to_string(x) +
+                           ") did not");
+    }
+  }
+};
+
 using msd::is_multiscale;
 using msd::MethodSettings;
 
@@ -212,23 +234,15 @@ const std::vector<Option>& options_table() {
                [](MethodSettings& s, const std::string&, py::handle v) {
                  if (!py::isinstance<py::str>(v) && PyCallable_Check(v.ptr())) {
                    s.propagation.transfer = msd::PropagationTransfer::Custom;
-                   // pybind11's wrapper holds the GIL around each call; a result that is no number is
-                   // a TypeError naming the option rather than pybind11's generic cast error.
-                   s.propagation.custom_transfer = [f = v.cast<std::function<double(double)>>()](double x) {
-                     try {
-                       return f(x);
-                     } catch (const py::cast_error&) {
-                       throw py::type_error("option transfer: the callable must return a number, t(" +
-                                            std::to_string(x) + ") did not");
-                     }
-                   };
+                   s.propagation.custom_transfer = PythonTransfer(v);
                  } else {
                    s.propagation.transfer = choice_value(v, "transfer", kTransfers);
                    s.propagation.custom_transfer = nullptr;
                  }
                },
                [](const MethodSettings& s, const std::string&) -> py::object {
-                 if (s.propagation.transfer == msd::PropagationTransfer::Custom) return py::str("custom");
+                 // The callable itself, so that Deformer(name, **d.options) rebuilds the method.
+                 if (const auto* f = s.propagation.custom_transfer.target<PythonTransfer>()) return *f->callable;
                  return choice_label(s.propagation.transfer, kTransfers);
                }};
       t.push_back(std::move(o));

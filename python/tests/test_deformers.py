@@ -165,8 +165,10 @@ def test_options_given_back_make_the_same_deformer(name):
 
 def test_a_python_transfer_function(lift):
     linear = msdeform.Deformer("propagate")
-    squared = msdeform.Deformer("propagate", transfer=lambda s: s * s)
-    assert squared.options["transfer"] == "custom"
+    square = lambda s: s * s  # noqa: E731
+    squared = msdeform.Deformer("propagate", transfer=square)
+    assert squared.options["transfer"] is square
+    assert msdeform.Deformer("propagate", **squared.options).options["transfer"] is square  # it said 'custom'
     for d in (linear, squared):
         d.prepare(lift.V, lift.F, lift.labels)
     a, b = linear.deform(lift.transforms), squared.deform(lift.transforms)

@@ -242,6 +242,8 @@ def scene(name, resolution=10000):
     plane (the unit square with 10x10 smooth bumps of height 0.05) and 'bar-lift', 'bar-bend120',
     'bar-twist135' on the bumpy bar (a tube of radius 0.15 along x, length 1). Fixed for x < 0.2, one
     handle for x > 0.8; lift raises it by 0.3, bend120 / twist135 turn it by 120 / 135 degrees.
+    'crease120' bends the plane by 120 degrees within a free strip 0.45 < x < 0.55, tighter than the
+    bumps (the seed's Fig. 9.10, where normal displacements cross).
 
     resolution: about that many vertices (an int, or a string such as '10k', '1M'); the nearest uniform
     Loop refinement is used. Returns an Edit (``V, F, labels, transforms = msdeform.scene('lift')``)

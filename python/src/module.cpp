@@ -235,18 +235,22 @@ std::vector<int> to_codes(py::handle obj, const char* what, long n) {
   if (n >= 0 && a.shape(0) != n)
     throw py::value_error(name + " has " + std::to_string(a.shape(0)) + " entries, but there are " + std::to_string(n) +
                           " vertices (one selection code per vertex)");
-  auto d = py::array_t<long long, py::array::forcecast>::ensure(a);
-  if (!d) throw py::error_already_set();
-  const auto u = d.unchecked<1>();
-  std::vector<int> codes(static_cast<size_t>(u.shape(0)));
-  for (py::ssize_t i = 0; i < u.shape(0); ++i) {
-    const long long c = u(i);
-    if (c < 0 || c > INT_MAX)
-      throw py::value_error(name + "[" + std::to_string(i) + "] = " + std::to_string(c) +
-                            " is not a selection code (0 fixed, 1 free, 2+k handle k)");
-    codes[static_cast<size_t>(i)] = static_cast<int>(c);
-  }
-  return codes;
+  // Read as the array's own signedness: 2^63 as uint64 is no negative number.
+  const auto read = [&](auto zero) {
+    auto d = py::array_t<decltype(zero), py::array::forcecast>::ensure(a);
+    if (!d) throw py::error_already_set();
+    const auto u = d.template unchecked<1>();
+    std::vector<int> codes(static_cast<size_t>(u.shape(0)));
+    for (py::ssize_t i = 0; i < u.shape(0); ++i) {
+      const auto c = u(i);
+      if (c < zero || c > static_cast<decltype(zero)>(INT_MAX))
+        throw py::value_error(name + "[" + std::to_string(i) + "] = " + std::to_string(c) +
+                              " is not a selection code (0 fixed, 1 free, 2+k handle k)");
+      codes[static_cast<size_t>(i)] = static_cast<int>(c);
+    }
+    return codes;
+  };
+  return kind == 'u' ? read(0ULL) : read(0LL);
 }
 
 std::vector<msd::Mat4> to_transforms(py::handle obj, const char* what) {
@@ -539,7 +543,9 @@ PermissionError for a missing or read-only folder.)doc");
       "The fields of msdeform.load_edit() as a dict (see there).");
   m.def("scene_names", &msd::scene_names,
         "The built-in scenes: lift, bend120, twist135 (the bumpy plane: the unit square with 10x10 bumps of "
-        "height 0.05) and bar-lift, bar-bend120, bar-twist135 (the bumpy bar: a tube of radius 0.15 along x).");
+        "height 0.05), bar-lift, bar-bend120, bar-twist135 (the bumpy bar: a tube of radius 0.15 along x) and "
+        "crease120 (the plane bent by 120 degrees within a free strip 0.1 wide, tighter than the bumps: the "
+        "seed's Fig. 9.10).");
 
   m.def(
       "select_box",

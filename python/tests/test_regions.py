@@ -81,6 +81,10 @@ def test_labels_are_validated_by_prepare(lift):
     bad[5] = -1
     with pytest.raises(ValueError, match=r"labels\[5\] = -1 is not a selection code"):
         shell.prepare(V, F, bad)
+    huge = labels.astype(np.uint64)
+    huge[5] = 2**63  # was printed as -9223372036854775808
+    with pytest.raises(ValueError, match=r"labels\[5\] = 9223372036854775808 is not a selection code"):
+        shell.prepare(V, F, huge)
     with pytest.raises(TypeError, match="boolean array"):
         shell.prepare(V, F, labels == 2)
     with pytest.raises(TypeError, match="dtype float64"):

@@ -79,6 +79,12 @@ EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {
     const bool transforms_from_file = need_transforms && (!sel.empty() || built_region) && !built_transforms;
     if (transforms_from_file && def.empty())
       throw InvalidInput("a mesh file needs handle transforms: --def FILE, or --translate / --rotate / --scale");
+    if (file_extension(mesh) == ".stl" && !sel.empty())
+      std::fprintf(stderr,
+                   "warning: %s: STL keeps no vertex list, so its vertices are numbered by first appearance "
+                   "(coincident corners merged); a .sel made for another file of this mesh selects other "
+                   "vertices here (.ply, .off and .obj keep the file's numbering)\n",
+                   mesh.c_str());
     c = load_edit_case(mesh, sel, transforms_from_file ? def : std::string());
     if (built_region) c.region = region.build_region(c.P, c.F);
     if (transforms_from_file && built_region && static_cast<int>(c.transforms.size()) != c.region.num_handles())

@@ -109,6 +109,11 @@ grep -qF "frame: no iteration was needed" out.txt || { cat out.txt; fail "the fr
 # STL output keeps no vertex list: said before the work.
 "$msdeform" deform --scene lift --resolution 2k --method shell -o lifted.stl >/dev/null 2>err.txt || fail "deform to STL"
 grep -q "STL keeps no vertex list" err.txt || fail "no warning that STL output renumbers the vertices"
+# ... nor on input, where a .sel of the OFF file selected other vertices without a word.
+"$msdeform" scene lift --resolution 2k -o stl-in >/dev/null
+"$msdeform" deform lifted.stl --sel stl-in/lift.sel --def stl-in/lift.def -o from-stl.off >/dev/null 2>err.txt
+grep -q "lifted.stl: STL keeps no vertex list, so its vertices are numbered by first appearance" err.txt ||
+  { cat err.txt; fail "no warning that an STL input's .sel may not apply"; }
 # The report measures the shape: the shell under a 120° bend tears edges (warned), ARAP does not.
 "$msdeform" deform --scene bend120 --resolution 2k --method shell -o s.off >out.txt 2>err.txt || fail "shell bend"
 grep -q "shape: .* of the free region's edges changed length beyond 1.5x" out.txt || { cat out.txt; fail "no shape line"; }

@@ -67,12 +67,13 @@ void check_affine(const std::vector<Mat4>& transforms, const std::string& who) {
 void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::string& who,
                                std::vector<std::string>& warnings) {
   for (size_t k = 0; k < transforms.size(); ++k) {
-    // The numerical rank (singular values above 1e-12 of the largest) decides: below 3 the map keeps as
-    // many dimensions of the handle (a plane, a line, a point); at 3 a negative determinant (of A over its
-    // largest singular value, which neither underflows nor overflows) is a reflection.
+    // The numerical rank (singular values above 1e-12 of the largest, and above 1e-6: a uniform scale by
+    // 1e-12 collapses the handle too) decides: below 3 the map keeps as many dimensions of the handle (a
+    // plane, a line, a point); at 3 a negative determinant (of A over its largest singular value, which
+    // neither underflows nor overflows) is a reflection.
     const Mat3 A = transforms[k].topLeftCorner<3, 3>();
     const Vec3 sigma = Eigen::JacobiSVD<Mat3>(A).singularValues();
-    const int rank = static_cast<int>((sigma.array() > 1e-12 * sigma(0)).count());
+    const int rank = static_cast<int>((sigma.array() > std::max(1e-12 * sigma(0), 1e-6)).count());
     const bool reflection = rank == 3 && (A / sigma(0)).determinant() < 0;
     char text[400];
     if (const double turn = rank == 3 && !reflection ? turn_degrees(A) : 0; turn > 179.9) {

@@ -228,11 +228,13 @@ expect_error 1 "the two ends of an edge of length" "$msdeform" deform split.off 
 [ "$(sed -n 2p welded.off | cut -d' ' -f1)" = "$(sed -n 2p split.off | cut -d' ' -f1)" ] ||
   fail "--weld changed the vertex count of the output"
 # A singular handle transform is named by what it does to the handle: a plane, a line or a point (its rank to
-# 1e-12); a tiny uniform scale is not singular, a tiny reflection is still a reflection. A half turn (a .def
-# holds one) is said to turn either way; 179 degrees is not one.
+# 1e-12 of its largest singular value and to 1e-6: a uniform scale by 1e-13, or a reflection by 1e-300,
+# collapses the handle as surely; by 1e-3 it does not). A half turn (a .def holds one) is said to turn
+# either way; 179 degrees is not one.
 for rank in "plane:1 0 0 0\n0 1 0 0\n0 0 0 0.1\n0 0 0 1" "line:1 0 0 0\n0 0 0 0\n0 0 0 0.1\n0 0 0 1" \
   "point:0 0 0 0\n0 0 0 0\n0 0 0 0.1\n0 0 0 1" "plane:1 0 0 0\n0 1 0 0\n0 0 1e-13 0.1\n0 0 0 1" \
-  "none:1e-13 0 0 0\n0 1e-13 0 0\n0 0 1e-13 0.1\n0 0 0 1" "reflection:1e-300 0 0 0\n0 1e-300 0 0\n0 0 -1e-300 0.1\n0 0 0 1" \
+  "point:1e-13 0 0 0\n0 1e-13 0 0\n0 0 1e-13 0.1\n0 0 0 1" "point:1e-300 0 0 0\n0 1e-300 0 0\n0 0 -1e-300 0.1\n0 0 0 1" \
+  "none:1e-3 0 0 0\n0 1e-3 0 0\n0 0 1e-3 0.1\n0 0 0 1" "reflection:1e-3 0 0 0\n0 1e-3 0 0\n0 0 -1e-3 0.1\n0 0 0 1" \
   "half:-1 0 0 0\n0 -1 0 0\n0 0 1 0.1\n0 0 0 1" "none:-0.999848 -0.017452 0 0\n0.017452 -0.999848 0 0\n0 0 1 0.1\n0 0 0 1"; do
   printf -- "${rank#*:}\n" >singular.def
   "$msdeform" deform lift.off --sel lift.sel --def singular.def --method shell -o singular.off >/dev/null 2>err.txt ||

@@ -45,28 +45,42 @@ TEST_CASE("a free vertex whose faces all have zero area: refused by name, or pla
   }
 }
 
+namespace {
+// The unit square as a 21 x 21 grid of vertices (index 21 i + j at (i, j) / 20) in 800 triangles: columns
+// i < 3 fixed, i > 17 handle 0, the rest free.
+struct Grid {
+  static constexpr int n = 21;
+  Positions P{n * n, 3};
+  Faces F{2 * (n - 1) * (n - 1), 3};
+  Region region;
+  Grid() {
+    std::vector<int> codes(P.rows(), Region::kFree);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        P.row(i * n + j) = Vec3(i / double(n - 1), j / double(n - 1), 0);
+        codes[i * n + j] = i < 3 ? Region::kFixed : i > 17 ? 2 : Region::kFree;
+      }
+    for (int i = 0, f = 0; i + 1 < n; ++i)
+      for (int j = 0; j + 1 < n; ++j) {
+        const int a = i * n + j;
+        F.row(f++) = Eigen::RowVector3i(a, a + n, a + n + 1);
+        F.row(f++) = Eigen::RowVector3i(a, a + n + 1, a + 1);
+      }
+    region = Region::from_codes(std::move(codes));
+  }
+};
+}  // namespace
+
 TEST_CASE("zero-area triangles that cut the surface in two are warned about by every surface method",
           "[deformation][solver]") {
   // A 21 x 21 grid whose column x = 0.5 lies on x = 0.55: its 40 triangles have no area, the cotan
   // Laplacian leaves them out, and shell moved the two sides as separate pieces (one at rest, one with
   // the handle: a cliff across the free region) without a word.
-  const int n = 21;
-  Positions P(n * n, 3);
-  Faces F(2 * (n - 1) * (n - 1), 3);
-  std::vector<int> codes(P.rows(), Region::kFree);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      const double x = (i == 10 ? 11 : i) / double(n - 1), y = j / double(n - 1);
-      P.row(i * n + j) = Vec3(x, y, 0);
-      codes[i * n + j] = i < 3 ? Region::kFixed : i > 17 ? 2 : Region::kFree;
-    }
-  for (int i = 0, f = 0; i + 1 < n; ++i)
-    for (int j = 0; j + 1 < n; ++j) {
-      const int a = i * n + j;
-      F.row(f++) = Eigen::RowVector3i(a, a + n, a + n + 1);
-      F.row(f++) = Eigen::RowVector3i(a, a + n + 1, a + 1);
-    }
-  const Region region = Region::from_codes(std::move(codes));
+  Grid grid;
+  for (int j = 0; j < Grid::n; ++j) grid.P(10 * Grid::n + j, 0) = 0.55;
+  const Positions& P = grid.P;
+  const Faces& F = grid.F;
+  const Region& region = grid.region;
   for (const char* name : {"shell", "propagate", "gradient", "multiscale-normal"}) {
     INFO(name);
     const auto deformer = builtin_methods().make(name);
@@ -86,22 +100,11 @@ TEST_CASE("needle triangles at free vertices are warned about by every surface m
   // A 21 x 21 grid whose one-ring around the middle vertex lies on a line, with the vertex 1e-8 off it: the
   // ring's triangles are needles whose cotangents the cotan Laplacian clamps, and the shell left the vertex
   // 0.16 behind its neighbours under a 0.3 lift (exit 0, the only warning blaming large rotations).
-  const int n = 21, c = 10 * n + 10;
-  Positions P(n * n, 3);
-  Faces F(2 * (n - 1) * (n - 1), 3);
-  std::vector<int> codes(P.rows(), Region::kFree);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      P.row(i * n + j) = Vec3(i / double(n - 1), j / double(n - 1), 0);
-      codes[i * n + j] = i < 3 ? Region::kFixed : i > 17 ? 2 : Region::kFree;
-    }
-  for (int i = 0, f = 0; i + 1 < n; ++i)
-    for (int j = 0; j + 1 < n; ++j) {
-      const int a = i * n + j;
-      F.row(f++) = Eigen::RowVector3i(a, a + n, a + n + 1);
-      F.row(f++) = Eigen::RowVector3i(a, a + n + 1, a + 1);
-    }
-  const Region region = Region::from_codes(std::move(codes));
+  const Grid grid;
+  const int c = 10 * Grid::n + 10;
+  const Positions& P = grid.P;
+  const Faces& F = grid.F;
+  const Region& region = grid.region;
   for (const bool squashed : {false, true}) {
     Positions Q = P;
     if (squashed) {

@@ -60,6 +60,10 @@ MeshInfo mesh_info(const Positions& P, const Faces& F) {
     i = j;
   }
   if (info.edges > 0) info.mean_edge_length = total_length / info.edges;
+  if (info.seam_vertices == 0 && info.boundary_edges > 0 && info.mean_edge_length > 0) {
+    info.near_seam_distance = 1e-3 * info.mean_edge_length;
+    info.near_seam_vertices = count_seam_vertices(P, oriented, info.near_seam_distance);
+  }
   info.euler_characteristic = info.vertices - info.edges + info.faces;
   for (int v = 0; v < info.vertices; ++v) info.boundary_loops += on_boundary[v] && find(v) == v;
   if (F.rows() > 0) info.degenerate_faces = cotan_laplacian(P, F).degenerate_faces;

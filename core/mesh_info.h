@@ -15,6 +15,10 @@ struct MeshInfo {
   int boundary_loops = 0;            //!< connected curves of boundary edges
   int unreferenced_vertices = 0;     //!< vertices no face uses (all of a point cloud's)
   int seam_vertices = 0;             //!< boundary vertices at another's coordinates (count_seam_vertices)
+  //! Boundary vertices within near_seam_distance (1e-3 of the mean edge length) of another boundary
+  //! vertex, where seam_vertices is 0: a seam whose copies were written with rounding (deform --weld EPS).
+  int near_seam_vertices = 0;
+  double near_seam_distance = 0;
   int degenerate_faces = 0;          //!< zero-area faces (see cotan_laplacian)
   int nonmanifold_edges = 0;         //!< edges in more than two faces
   int nonmanifold_vertices = 0;      //!< vertices whose faces do not form one fan

@@ -20,6 +20,10 @@ void print_info(const std::string& what, const MeshInfo& i, const LoadReport* re
   std::printf("  unreferenced vertices %d\n", i.unreferenced_vertices);
   std::printf("  seam vertices         %d%s\n", i.seam_vertices,
               i.seam_vertices > 0 ? " (boundary vertices at another's coordinates: deform --weld 0 joins them)" : "");
+  if (i.near_seam_vertices > 0)
+    std::printf("  near-seam vertices    %d (boundary vertices within %.3g of another, 1e-3 of the mean edge: a seam "
+                "written with rounding? deform --weld %.3g joins them)\n",
+                i.near_seam_vertices, i.near_seam_distance, i.near_seam_distance);
   std::printf("  degenerate faces      %d (zero area)\n", i.degenerate_faces);
   std::printf("  non-manifold edges    %d\n", i.nonmanifold_edges);
   std::printf("  non-manifold vertices %d\n", i.nonmanifold_vertices);

@@ -5,6 +5,7 @@
 
 #include "msdeform/core/edit_case.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/mesh_info.h"
 #include "msdeform/core/scenes.h"
 #include "msdeform/core/surface_check.h"
 #include "msdeform/core/weld.h"
@@ -44,6 +45,21 @@ EditCase split_plane() {
   return c;
 }
 }  // namespace
+
+TEST_CASE("mesh_info: a seam written with rounding is reported as near-seam vertices with the distance to weld",
+          "[core][weld]") {
+  // A seam whose copies were jittered by 1e-7 (a float round trip) read "seam vertices 0" and no hint.
+  EditCase split = split_plane();
+  const int copies = static_cast<int>(split.P.rows() - scene_case("lift", 2000).P.rows());
+  for (Eigen::Index v = split.P.rows() - copies; v < split.P.rows(); ++v) split.P(v, 1) += 1e-7;
+  const MeshInfo info = mesh_info(split.P, split.F);
+  CHECK(info.seam_vertices == 0);
+  CHECK(info.near_seam_vertices == 2 * copies);
+  CHECK(info.near_seam_distance == Approx(1e-3 * info.mean_edge_length));
+  CHECK(weld_case(split, info.near_seam_distance).weld->merged == copies);
+  const MeshInfo intact = mesh_info(scene_case("lift", 2000).P, scene_case("lift", 2000).F);
+  CHECK(intact.near_seam_vertices == 0);  // the plane's own boundary has no near pair
+}
 
 TEST_CASE("weld: a plane split along a seam is counted, welded for the method and unwelded for the file",
           "[core][weld]") {

@@ -107,51 +107,73 @@ void affine_targets(const Positions& rest, const std::vector<int>& constrained, 
 
 namespace {
 
-// Warnings on triangles the cotan Laplacian cannot weigh as they are (core/laplacian.h):
-// - zero-area triangles, which it leaves out, where they cut the surface: parts joined only through them
-//   move as separate pieces under the methods built on it (a strip of 40 collapsed triangles across a
-//   grid: one side stayed at rest while the other followed the handle, exit 0);
-// - needles (a corner's cotangent above LaplaceOperator::kMaxCotangent) at a free vertex, whose weights
-//   it clamps: the vertices there are tied to their neighbours by weights that do not match the geometry
-//   (a one-ring squashed onto a line with its centre 1e-8 off it: the shell left the centre 0.16 behind
-//   its neighbours, exit 0). None of the survey's, libigl's or CGAL's meshes has one (the largest
-//   cotangent measured: 840, ChineseDragon-10kv).
+// Warnings where triangles the cotan Laplacian cannot weigh as they are (core/laplacian.h) cut the surface:
+// - zero-area triangles, which it leaves out: parts joined only through them move as separate pieces under
+//   the methods built on it (a strip of 40 collapsed triangles across a grid: one side stayed at rest while
+//   the other followed the handle, exit 0);
+// - needles with a free vertex (a corner's cotangent above LaplaceOperator::kMaxCotangent), whose weights
+//   it clamps: parts joined only through them (and zero-area ones) are tied to the rest by weights that do
+//   not match the geometry (a one-ring squashed onto a line with its centre 1e-8 off it: the shell left the
+//   centre 0.16 behind its neighbours, exit 0), or clamped a thousandfold and more (a cotangent above 1e8:
+//   a one-ring shrunk to 1e-12, which explicit Laplacian editing left at rest). A needle here and there,
+//   as in 3 of CGAL's 145 meshes (triceratops: 2, cotangents up to 3e5; mpi_triang up to 3e6), cuts
+//   nothing and is not warned about: the results there were sound.
 void degenerate_triangle_warnings(const Positions& P, const Faces& F, const Region& region,
                                   const std::string& who, std::vector<std::string>& warnings) {
-  Faces kept(F.rows(), 3);
-  Eigen::Index rows = 0;
+  const int nv = static_cast<int>(P.rows());
+  Faces with_area(F.rows(), 3), well_shaped(F.rows(), 3);  // no zero-area faces; no needles either
+  Eigen::Index rows = 0, shaped = 0;
   long degenerate = 0, first = -1, needles = 0, first_needle = -1;
+  double sharpest = 0;  // the largest |cotangent| of the needles
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const TriangleCotangents t = triangle_cotangents(P.row(F(f, 0)), P.row(F(f, 1)), P.row(F(f, 2)));
     if (t.degenerate) {
       if (degenerate++ == 0) first = f;
       continue;
     }
-    kept.row(rows++) = F.row(f);
+    with_area.row(rows++) = F.row(f);
     if (t.needle_corners > 0 &&
         (region.code(F(f, 0)) == Region::kFree || region.code(F(f, 1)) == Region::kFree ||
-         region.code(F(f, 2)) == Region::kFree))
+         region.code(F(f, 2)) == Region::kFree)) {
       if (needles++ == 0) first_needle = f;
+      sharpest = std::max({sharpest, std::abs(t.cot[0]), std::abs(t.cot[1]), std::abs(t.cot[2])});
+    } else {
+      well_shaped.row(shaped++) = F.row(f);
+    }
   }
-  if (needles > 0)
-    warnings.push_back(who + ": " + std::to_string(needles) +
-                       " needle triangle(s) at free vertices (the first is face " +
-                       std::to_string(first_needle) + ", vertices " + std::to_string(F(first_needle, 0)) +
-                       ", " + std::to_string(F(first_needle, 1)) + ", " + std::to_string(F(first_needle, 2)) +
-                       ") " + kNeedleWarning +
-                       ": methods built on it may leave the vertices there behind their "
-                       "neighbours; repair the mesh there");
-  if (degenerate == 0) return;
-  kept.conservativeResize(rows, 3);
-  const int nv = static_cast<int>(P.rows());
-  const std::vector<int> whole = vertex_components(F, nv), cut = vertex_components(kept, nv);
-  const int pieces = 1 + *std::max_element(whole.begin(), whole.end()),
-            cut_pieces = cut.empty() ? 0 : 1 + *std::max_element(cut.begin(), cut.end());
-  if (cut_pieces <= pieces) return;
-  warnings.push_back(who + ": " + std::to_string(degenerate) + " zero-area triangle(s) (the first is face " +
-                     std::to_string(first) + ") " + kZeroAreaCutWarning + " " + std::to_string(cut_pieces) +
-                     " pieces joined only through them; methods built on the cotangent Laplacian leave such "
-                     "triangles out and move the pieces apart: repair the mesh there");
+  if (degenerate == 0 && needles == 0) return;
+  // Pieces: components of the faces kept, and vertices that had faces and lost them all.
+  const auto pieces = [nv](const Faces& kept, const std::vector<int>* had) {
+    const std::vector<int> component = vertex_components(kept, nv);
+    int count = component.empty() ? 0 : 1 + *std::max_element(component.begin(), component.end());
+    if (had)
+      for (int v = 0; v < nv; ++v) count += component[v] < 0 && (*had)[v] >= 0;
+    return count;
+  };
+  with_area.conservativeResize(rows, 3);
+  well_shaped.conservativeResize(shaped, 3);
+  const int whole = pieces(F, nullptr), cut = pieces(with_area, nullptr);
+  if (cut > whole)
+    warnings.push_back(
+        who + ": " + std::to_string(degenerate) + " zero-area triangle(s) (the first is face " +
+        std::to_string(first) + ") " + kZeroAreaCutWarning + " " + std::to_string(cut) +
+        " pieces joined only through them; methods built on the cotangent Laplacian leave such "
+        "triangles out and move the pieces apart: repair the mesh there");
+  if (needles == 0) return;
+  const std::vector<int> had = vertex_components(with_area, nv);
+  const int cut_more = pieces(well_shaped, &had);
+  if (cut_more == cut && !(sharpest > 1e3 * LaplaceOperator::kMaxCotangent)) return;
+  char clamped[96];
+  std::snprintf(clamped, sizeof clamped, " (cotangents up to %.3g, clamped to %.3g)", sharpest,
+                LaplaceOperator::kMaxCotangent);
+  warnings.push_back(
+      who + ": " + std::to_string(needles) + " needle triangle(s) at free vertices (the first is face " +
+      std::to_string(first_needle) + ", vertices " + std::to_string(F(first_needle, 0)) + ", " +
+      std::to_string(F(first_needle, 1)) + ", " + std::to_string(F(first_needle, 2)) + ")" +
+      (cut_more > cut ? " join " + std::to_string(cut_more) + " pieces only through them and" : "") + " " +
+      kNeedleWarning + clamped +
+      ": methods built on it may leave the vertices there behind their neighbours; repair the mesh "
+      "there");
 }
 
 }  // namespace

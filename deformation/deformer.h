@@ -202,7 +202,8 @@ constexpr const char* kTornEdgesWarning = "vertices placed by different transfor
 //! In the prepare warning about zero-area triangles that cut the surface into pieces joined only through
 //! them (the cotan Laplacian leaves them out).
 constexpr const char* kZeroAreaCutWarning = "cut the surface into";
-//! In the prepare warning on needle triangles (a corner's cotangent above LaplaceOperator::kMaxCotangent).
+//! In the prepare warning on needle triangles (a corner's cotangent above LaplaceOperator::kMaxCotangent)
+//! that cut the surface into pieces joined only through them.
 constexpr const char* kNeedleWarning = "have cotangent weights the cotangent Laplacian clamps";
 //! In the frame warning of a method that stopped before its tolerance (Deformer::end_frame).
 constexpr const char* kNotConvergedWarning = ": stopped after ";

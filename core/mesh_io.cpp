@@ -698,21 +698,23 @@ FileContents read_contents(const std::string& path, const std::string& who) {
 }
 
 // Splits polygon corner[0 .. n) (n > 3) of `points` into n − 2 triangles that turn the polygon's way (their
-// normals along its Newell normal), judged in the plane of that normal by their shape, 2·area / longest
-// edge² (0.87 equilateral, 0 on a line):
-// - a fan from the first corner where its triangles all turn that way and none is a sliver next to the best
-//   fan's (convex polygons, most non-planar quads: the fan keeps the file's faces as every mesh tool reads
-//   them);
-// - else the fan from the corner whose triangles are best shaped: a polygon with a corner of nearly 180°
-//   (an edge split to mend a T-junction, two quads merged) gave a sliver along its neighbour's edges from
-//   its first corner, and the two polygons on either side of one such chain the same sliver twice (a
-//   non-manifold edge, or self-intersections on a curved mesh);
-// - else (a concave polygon without a fan that keeps it as drawn) ear clipping, the best-shaped ear first.
-// A polygon whose corners lie on a line keeps its fan (its triangles are degenerate, which check_surface
-// reports). Fans and ears are compared for polygons of up to kShapedCorners corners (quadratic in n);
-// larger ones take the first corner's fan or the first ear.
-enum class PolygonSplit { Fan, OtherFan, EarClipped, CrossesItself };
-constexpr int kShapedCorners = 64;
+// normals along its Newell normal), judged by their shape: twice the area in the plane of that normal over
+// the longest edge squared in space (0.87 for an equilateral triangle in the plane; 0 on a line, and small
+// for a triangle standing steeply on that plane). Of the splits that keep the polygon as drawn:
+// - the fan from its first corner where it is shaped nearly as well as the best split (half as well; a
+//   quad's a tenth: the split every mesh tool reads);
+// - else the best-shaped split, whose worst triangle is the largest (dynamic programming over the
+//   polygon's diagonals, up to kOptimalCorners corners): a polygon with a corner of nearly 180° (an edge
+//   split to mend a T-junction, two quads merged) gave a sliver along its neighbour's edges from its first
+//   corner, and the two polygons on either side of one such chain the same sliver twice (a non-manifold
+//   edge, or self-intersections on a curved mesh); two polygons sharing a chain raised like a roof each
+//   closed the chain with a chord, standing steeply on its plane, over the same lens; a square whose sides
+//   carry corners bulged by 1e-9 had a sliver in every fan and was refused by the shell as singular.
+// Larger polygons take the best-shaped fan (up to kShapedFans corners; the first corner's beyond), or
+// where no fan keeps the polygon as drawn (concave), ear clipping. A polygon whose corners lie on a line
+// keeps its fan (its triangles are degenerate, which check_surface reports).
+enum class PolygonSplit { Fan, Other, CrossesItself };
+constexpr int kOptimalCorners = 256, kShapedFans = 1024;
 PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, int n,
                            std::vector<std::array<int, 3>>& out) {
   Vec3 normal = Vec3::Zero();  // Newell: twice the vector area, whatever the first corner
@@ -733,9 +735,10 @@ PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, i
     const Eigen::Vector2d e = q[b] - q[a], f = q[c] - q[a];
     return e.x() * f.y() - e.y() * f.x();
   };
-  const auto shape = [&](int a, int b, int c) {  // 2·area / longest edge², ≤ 0 where turned over or flat
+  const auto shape = [&](int a, int b, int c) {  // ≤ 0 where turned over or flat
+    const Vec3 &pa = points[corner[a]], &pb = points[corner[b]], &pc = points[corner[c]];
     const double longest =
-        std::max({(q[b] - q[a]).squaredNorm(), (q[c] - q[b]).squaredNorm(), (q[a] - q[c]).squaredNorm()});
+        std::max({(pb - pa).squaredNorm(), (pc - pb).squaredNorm(), (pa - pc).squaredNorm()});
     const double t = turn(a, b, c);
     return t > 0 ? t / longest : 0.0;
   };
@@ -745,34 +748,87 @@ PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, i
       worst = std::min(worst, shape(apex, (apex + k) % n, (apex + k + 1) % n));
     return worst;
   };
-  const double first = fan_shape(0);
-  double best = first;
-  int apex = 0;
-  for (int k = 1; k < n && n <= kShapedCorners; ++k)
-    if (const double s = fan_shape(k); s > best) best = s, apex = k;
-  if (first > 0 && first >= 0.1 * best) apex = 0;
-  if (best > 0) {
+  const auto fan = [&](int apex) {
     for (int k = 1; k + 1 < n; ++k)
       out.push_back({corner[apex], corner[(apex + k) % n], corner[(apex + k + 1) % n]});
-    return apex == 0 ? PolygonSplit::Fan : PolygonSplit::OtherFan;
+    return apex == 0 ? PolygonSplit::Fan : PolygonSplit::Other;
+  };
+  const double first = fan_shape(0);
+  if (n <= kOptimalCorners) {
+    // best[i][j]: the largest worst-triangle shape of a split of the sub-polygon i, i+1, ..., j closed by
+    // the diagonal (i, j); 0 where there is none. A diagonal joins two corners through the polygon's inside:
+    // it leaves each end into the corner's interior and crosses or touches no edge.
+    const auto inside = [&](int i, int j) {  // (i, j) leaves corner i into its interior
+      const int before = (i + n - 1) % n, after = (i + 1) % n;
+      return turn(before, i, after) > 0 ? turn(i, j, before) > 0 && turn(j, i, after) > 0
+                                        : !(turn(i, j, after) >= 0 && turn(j, i, before) >= 0);
+    };
+    const auto between = [&](int i, int j, int k) {  // k, on the line of (i, j), lies on the segment
+      return (q[k] - q[i]).dot(q[j] - q[i]) >= 0 && (q[k] - q[j]).dot(q[i] - q[j]) >= 0;
+    };
+    const auto crosses = [&](int i, int j) {  // (i, j) meets an edge other than those at i and j
+      for (int k = 0; k < n; ++k) {
+        const int l = (k + 1) % n;
+        if (k == i || k == j || l == i || l == j) continue;
+        const double a = turn(i, j, k), b = turn(i, j, l), c = turn(k, l, i), d = turn(k, l, j);
+        if (a != 0 && b != 0 && (a > 0) != (b > 0) && (c >= 0) != (d >= 0)) return true;
+        if ((a == 0 && between(i, j, k)) || (b == 0 && between(i, j, l))) return true;  // a corner on it
+      }
+      return false;
+    };
+    std::vector<double> best(n * n, 0);
+    std::vector<int> split(n * n, -1);
+    std::vector<char> usable(n * n, 0);  // an edge of the polygon or a diagonal
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j)
+        usable[i * n + j] =
+            j == i + 1 || (i == 0 && j == n - 1) || (inside(i, j) && inside(j, i) && !crosses(i, j));
+    for (int i = 0; i + 1 < n; ++i) best[i * n + i + 1] = 1;  // an edge: nothing to split
+    for (int length = 2; length < n; ++length)
+      for (int i = 0; i + length < n; ++i) {
+        const int j = i + length;
+        if (!usable[i * n + j]) continue;
+        for (int k = i + 1; k < j; ++k) {
+          const double s = std::min({best[i * n + k], best[k * n + j], shape(i, k, j)});
+          if (s > best[i * n + j]) best[i * n + j] = s, split[i * n + j] = k;
+        }
+      }
+    const double optimum = best[n - 1];  // (0, n − 1) is the polygon's closing edge
+    if (first > 0 && first >= (n == 4 ? 0.1 : 0.5) * optimum) return fan(0);
+    std::vector<std::pair<int, int>> stack;
+    if (optimum > 0) stack.push_back({0, n - 1});  // else rounding refused every split: ear clipping below
+    while (!stack.empty()) {
+      const auto [i, j] = stack.back();
+      stack.pop_back();
+      if (j - i < 2) continue;
+      const int k = split[i * n + j];
+      out.push_back({corner[i], corner[k], corner[j]});
+      stack.push_back({i, k}), stack.push_back({k, j});
+    }
+    if (optimum > 0) return PolygonSplit::Other;
   }
+  double best = first;
+  int apex = 0;
+  for (int k = 1; k < n && n <= kShapedFans; ++k)
+    if (const double s = fan_shape(k); s > best) best = s, apex = k;
+  if (first > 0 && first >= 0.5 * best) apex = 0;
+  if (best > 0) return fan(apex);
+  // Ear clipping: the first ear from the polygon's start each time.
   std::vector<int> left(n);
   std::iota(left.begin(), left.end(), 0);
   const size_t start = out.size();
   while (left.size() > 3) {
     const int m = static_cast<int>(left.size());
     int ear = -1;
-    double ear_shape = 0;
-    for (int i = 0; i < m && (ear < 0 || m <= kShapedCorners); ++i) {
+    for (int i = 0; i < m && ear < 0; ++i) {
       const int a = left[(i + m - 1) % m], b = left[i], c = left[(i + 1) % m];
-      const double s = shape(a, b, c);
-      if (!(s > ear_shape)) continue;  // a reflex or straight corner is no ear; a better one is known
-      bool empty = true;               // no other corner inside or on the ear
+      if (!(turn(a, b, c) > 0)) continue;  // a reflex or straight corner is no ear
+      bool empty = true;                   // no other corner inside or on the ear
       for (int j : left)
         if (j != a && j != b && j != c && q[j] != q[a] && q[j] != q[b] && q[j] != q[c] &&
             turn(a, b, j) >= 0 && turn(b, c, j) >= 0 && turn(c, a, j) >= 0)
           empty = false;
-      if (empty) ear = i, ear_shape = s;
+      if (empty) ear = i;
     }
     if (ear < 0) {
       out.resize(start);
@@ -786,7 +842,7 @@ PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, i
     return PolygonSplit::CrossesItself;
   }
   out.push_back({corner[left[0]], corner[left[1]], corner[left[2]]});
-  return PolygonSplit::EarClipped;
+  return PolygonSplit::Other;
 }
 
 // The file's vertices as they are; its polygons as triangles (split_polygon), without faces that repeat a
@@ -825,6 +881,14 @@ TriangleSoup triangulate(const FileContents& soup, const std::string& path, cons
       continue;
     }
     ++report.polygons_triangulated;
+    for (int k = 0; k < n; ++k)  // a zero-length side leaves no split without a flat triangle
+      if (soup.points[corner[k]] == soup.points[corner[(k + 1) % n]])
+        throw InvalidInput(who + ": " + path +
+                           (soup.lines[f] > 0 ? " line " + std::to_string(soup.lines[f]) : "") + ": face " +
+                           std::to_string(f) + " is a polygon whose corners " + std::to_string(k) + " and " +
+                           std::to_string((k + 1) % n) + " (vertices " + std::to_string(corner[k]) + " and " +
+                           std::to_string(corner[(k + 1) % n]) +
+                           ") are at the same point: merge the two vertices or drop one from the face");
     const PolygonSplit split = split_polygon(soup.points, corner, n, triangles);
     if (split == PolygonSplit::CrossesItself)
       throw InvalidInput(who + ": " + path +
@@ -832,8 +896,7 @@ TriangleSoup triangulate(const FileContents& soup, const std::string& path, cons
                          std::to_string(f) + " is a polygon of " + std::to_string(n) +
                          " corners that crosses itself (in the plane of its normal): no split into triangles "
                          "keeps it as drawn; split it into triangles or simple polygons in the modeller");
-    report.concave_polygons += split == PolygonSplit::EarClipped;
-    report.polygons_fanned_elsewhere += split == PolygonSplit::OtherFan;
+    report.polygons_split_otherwise += split == PolygonSplit::Other;
   }
   // Duplicates: sort the vertex sets, keep the first triangle of each.
   std::vector<std::array<int, 4>> keys(triangles.size());

@@ -10,14 +10,11 @@ namespace msd {
 
 //! What loading did to the file's faces. The file's vertices are never changed, added or reordered.
 struct LoadReport {
-  //! Faces with more than 3 corners, split into triangles: fans from their first corner (from the corner
-  //! whose fan is best shaped where the first corner's has a sliver: a corner of nearly 180°), or for a
-  //! concave polygon (whose fans would turn a triangle over) by ear clipping in the plane of its normal.
+  //! Faces with more than 3 corners, split into triangles (in the plane of each one's normal): fans from
+  //! their first corner, or where that fan has a sliver or turns a triangle over (a corner of nearly
+  //! 180°, a concave polygon) the best-shaped split.
   int polygons_triangulated = 0;
-  int concave_polygons = 0;          //!< of those, the ones split by ear clipping
-  //! Of those, the ones split into a fan from another corner than the first (whose fan has a sliver, or a
-  //! triangle turned over where the polygon is concave).
-  int polygons_fanned_elsewhere = 0;
+  int polygons_split_otherwise = 0;  //!< of those, the ones not split into their first corner's fan
   int degenerate_faces_skipped = 0;  //!< faces that repeat a vertex index (dropped)
   int duplicate_faces_dropped = 0;   //!< triangles with the vertex set of an earlier one (dropped)
   int faces_flipped = 0;             //!< load_mesh: triangles turned over to agree with their neighbours
@@ -37,7 +34,7 @@ struct TriangleSoup {
 };
 
 //! Loads a file as it is: its vertices exactly (count and order: selection files index them) and its
-//! faces as triangles (polygons split into fans, or concave ones by ear clipping; faces that repeat a vertex
+//! faces as triangles (polygons split as LoadReport::polygons_triangulated says; faces that repeat a vertex
 //! index and triangles with the vertex set of an earlier one dropped, counted in the report). No face is
 //! needed: an OFF with 0 faces, a PLY with only a vertex element or an OBJ with only `v` lines is a point
 //! cloud. Orientation and manifoldness are not looked at (see check_surface). An STL's vertices are its

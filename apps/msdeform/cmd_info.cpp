@@ -32,13 +32,11 @@ void print_info(const std::string& what, const MeshInfo& i, const LoadReport* re
               i.flipped_faces);
   if (report) {
     std::printf("  polygons triangulated %d", report->polygons_triangulated);
-    if (report->polygons_fanned_elsewhere > 0)
+    if (report->polygons_split_otherwise > 0)
       std::printf(
-          " (%d into fans from another corner than the first, which gave a sliver or a turned-over "
-          "triangle)",
-          report->polygons_fanned_elsewhere);
-    if (report->concave_polygons > 0)
-      std::printf(" (%d concave: split by ear clipping, not into fans)", report->concave_polygons);
+          " (%d not into their first corner's fan, which had a sliver or a turned-over triangle: "
+          "into the best-shaped triangles)",
+          report->polygons_split_otherwise);
     std::printf("\n");
     std::printf("  repeated-index faces  %d (dropped)\n", report->degenerate_faces_skipped);
     std::printf("  duplicate faces       %d (dropped)\n", report->duplicate_faces_dropped);

@@ -317,8 +317,7 @@ namespace {
 py::dict load_report(const msd::LoadReport& r) {
   py::dict d;
   d["polygons_triangulated"] = r.polygons_triangulated;
-  d["concave_polygons"] = r.concave_polygons;
-  d["polygons_fanned_elsewhere"] = r.polygons_fanned_elsewhere;
+  d["polygons_split_otherwise"] = r.polygons_split_otherwise;
   d["degenerate_faces_skipped"] = r.degenerate_faces_skipped;
   d["duplicate_faces_dropped"] = r.duplicate_faces_dropped;
   d["faces_flipped"] = r.faces_flipped;

@@ -4,7 +4,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <random>
+#include <sstream>
 
 #include "msdeform/core/edit_case.h"
 #include "msdeform/core/errors.h"
@@ -141,7 +143,7 @@ TEST_CASE("a concave polygon is split into triangles that cover it once, a conve
   REQUIRE(concave.F.rows() == 3);
   check_cover(concave, 2.5);  // the square of side 2 less the notch (area 1.5)
   CHECK(report.polygons_triangulated == 1);
-  CHECK(report.polygons_fanned_elsewhere == 1);  // from its reflex corner
+  CHECK(report.polygons_split_otherwise == 1);
   // Every start: the reflex corner first, last, in the middle; and an L of eight corners (area 3).
   for (int shift = 0; shift < 5; ++shift) {
     std::string face = "f";
@@ -162,7 +164,7 @@ TEST_CASE("a concave polygon is split into triangles that cover it once, a conve
   const TriangleSoup hexagon = load_soup(tmp.file("hexagon.off"), &convex);
   REQUIRE(hexagon.F.rows() == 4);
   for (int k = 0; k < 4; ++k) CHECK(hexagon.F.row(k) == Eigen::RowVector3i(0, k + 1, k + 2));
-  CHECK(convex.concave_polygons == 0);
+  CHECK(convex.polygons_split_otherwise == 0);
   // A polygon that crosses itself (a bow tie) has no such split: refused, with its line and face.
   for (const char* bowtie :
        {"0 0 0\n2 2 0\n2 0 0\n0 1 0\n", "0 0 0\n1 1 0\n1 0 0\n0 1 0\n"}) {  // lobes unequal, equal
@@ -194,6 +196,46 @@ TEST_CASE("polygons with a corner of nearly 180 degrees split without slivers", 
       CHECK((p1 - p0).cross(p2 - p0).z() >= 0.99);  // twice the area: every triangle a half square
     }
   }
+  // Two non-planar hexagons sharing a chain raised like a roof (27 degrees): each closed the chain with
+  // the chord (0, 3), over the same lens, so that edge had 4 faces.
+  std::ofstream(tmp.file("roof.obj")) << "v 0 0 0\nv 0.333333 0 0.25\nv 0.666667 0 0.25\nv 1 0 0\nv 1 0.5 0\n"
+                                         "v 0 0.5 0\nv 0 -0.5 0\nv 1 -0.5 0\nf 1 2 3 4 5 6\nf 4 3 2 1 7 8\n";
+  TriangleSoup roof = load_soup(tmp.file("roof.obj"));
+  CHECK(roof.F.rows() == 8);
+  CHECK(check_surface(roof.P, roof.F).problem().empty());
+  // A square whose sides carry three corners each, bulged out by 1e-9: every fan had a sliver (shape 4e-10),
+  // and the shell refused the mesh as singular.
+  std::ostringstream square;
+  square << "OFF\n16 1 0\n";
+  for (int side = 0; side < 4; ++side)
+    for (int k = 0; k < 4; ++k) {
+      const double t = k / 4.0, bulge = 1e-9 * std::sin(M_PI * t);
+      const Vec3 p = side == 0   ? Vec3(t, -bulge, 0)
+                     : side == 1 ? Vec3(1 + bulge, t, 0)
+                     : side == 2 ? Vec3(1 - t, 1 + bulge, 0)
+                                 : Vec3(-bulge, 1 - t, 0);
+      square << p.x() << " " << p.y() << " 0\n";
+    }
+  square << "16";
+  for (int k = 0; k < 16; ++k) square << " " << k;
+  std::ofstream(tmp.file("bulged.off")) << std::setprecision(17) << square.str() << "\n";
+  LoadReport bulged_report;
+  const TriangleSoup bulged = load_soup(tmp.file("bulged.off"), &bulged_report);
+  REQUIRE(bulged.F.rows() == 14);
+  CHECK(bulged_report.polygons_split_otherwise == 1);
+  for (Eigen::Index f = 0; f < bulged.F.rows(); ++f) {
+    const Vec3 p0 = bulged.P.row(bulged.F(f, 0)), p1 = bulged.P.row(bulged.F(f, 1)),
+               p2 = bulged.P.row(bulged.F(f, 2));
+    const double longest =
+        std::max({(p1 - p0).squaredNorm(), (p2 - p1).squaredNorm(), (p0 - p2).squaredNorm()});
+    INFO("triangle " << f);
+    CHECK((p1 - p0).cross(p2 - p0).z() / longest >= 0.1);  // no sliver
+  }
+  // A side of zero length: named as such (it was "a polygon that crosses itself").
+  std::ofstream(tmp.file("coincident.off")) << "OFF\n5 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n1 0 0\n5 0 1 4 2 3\n";
+  CHECK_THROWS_WITH(
+      load_soup(tmp.file("coincident.off")),
+      Contains("face 0 is a polygon whose corners 1 and 2 (vertices 1 and 4) are at the same point"));
   // A convex quad keeps its first corner's fan even when the other diagonal is a little better.
   std::ofstream(tmp.file("quad.obj")) << "v 0 0 0\nv 1 0 0\nv 1.2 1 0\nv 0 1 0\nf 1 2 3 4\n";
   const TriangleSoup quad = load_soup(tmp.file("quad.obj"));

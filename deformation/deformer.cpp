@@ -209,7 +209,8 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
     throw InvalidInput(name() + ": the region has no handle vertex (selection code 2 or higher); nothing to move");
   if (std::string torn = torn_edges_warning(F, region, name()); !torn.empty())
     prepare_warnings_.push_back(std::move(torn));
-  if (surface) degenerate_triangle_warnings(P, F, region, name(), prepare_warnings_);
+  if (surface && traits().cotan_laplacian)
+    degenerate_triangle_warnings(P, F, region, name(), prepare_warnings_);
   try {
     do_prepare(P, F, region);
   } catch (const SolverError& e) {

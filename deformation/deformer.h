@@ -46,6 +46,9 @@ struct DeformerTraits {
   //! reproduces translations; linear surface methods do not reproduce rotations of a curved surface
   //! (seed 9.4: they deform displacements, not rotations).
   bool reproduces_rigid_motions = true;
+  //! Surface methods that weigh the mesh with the cotan Laplacian (core/laplacian.h): prepare warns where
+  //! its zero-area and needle triangles cut the surface. False for PriMo and Euclidean propagation.
+  bool cotan_laplacian = true;
 };
 
 //! What the last frame measured about its own result: a frame never returns a result that was not

@@ -56,6 +56,7 @@ DeformerTraits PrimoDeformer::traits() const {
   DeformerTraits t;
   t.solve = DeformerSolve::Iterative;
   t.initial_guess = true;
+  t.cotan_laplacian = false;  // prisms on the faces
   return t;
 }
 

@@ -80,8 +80,13 @@ class TransformationPropagation : public Deformer {
   //! another transfer (it would be ignored), or time_factor is not in [1e-6, 1e6].
   explicit TransformationPropagation(PropagationOptions options = {});
   const std::string& name() const override { return name_; }
-  //! Surface, linear, exact constraints, reproduces rigid motions; affine handles only.
-  DeformerTraits traits() const override { return {}; }
+  //! Surface, linear, exact constraints, reproduces rigid motions; affine handles only; the cotan Laplacian
+  //! for the harmonic and geodesic fields only.
+  DeformerTraits traits() const override {
+    DeformerTraits t;
+    t.cotan_laplacian = options_.field != PropagationField::Euclidean;
+    return t;
+  }
   const PropagationOptions& options() const { return options_; }
 
   //! #V by #handles weights used per frame: column k is handle k's field after the transfer function

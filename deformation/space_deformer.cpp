@@ -41,6 +41,7 @@ DeformerTraits SpaceDeformer::traits() const {
   t.solve = DeformerSolve::Linear;
   t.vertex_targets = true;
   t.exact_constraints = exact_constraints();
+  t.cotan_laplacian = false;
   return t;
 }
 

@@ -157,8 +157,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    if (const std::string hint = misplaced_option(app, argc, argv);
-        dynamic_cast<const CLI::ExtrasError*>(&e) && !hint.empty()) {
+    // An option of another subcommand is the cause of whatever CLI11 reports (an unexpected argument, or
+    // its value taken for the mesh: "mesh excludes --scene").
+    if (const std::string hint = e.get_exit_code() != 0 ? misplaced_option(app, argc, argv) : std::string();
+        !hint.empty()) {
       std::cerr << hint << "\nRun with --help or --help-all for more information.\n";
       return 2;
     }

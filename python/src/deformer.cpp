@@ -683,23 +683,34 @@ frame_report.warnings.)doc";
 }  // namespace
 
 void bind_deformer(py::module_& m) {
-  py::class_<msd::DeformerTraits>(m, "DeformerTraits", "What a method declares about itself (Deformer.traits).")
+  py::class_<msd::DeformerTraits>(m, "DeformerTraits",
+                                  "What a method declares about itself (Deformer.traits).")
       .def_property_readonly(
           "domain",
-          [](const msd::DeformerTraits& t) { return t.domain == msd::DeformerDomain::Surface ? "surface" : "space"; },
-          "'surface': moves the mesh's own vertices through its triangles (prepare needs faces); 'space': deforms "
+          [](const msd::DeformerTraits& t) {
+            return t.domain == msd::DeformerDomain::Surface ? "surface" : "space";
+          },
+          "'surface': moves the mesh's own vertices through its triangles (prepare needs faces); 'space': "
+          "deforms "
           "the space around the input (any points, evaluate())")
       .def_property_readonly(
           "solve",
-          [](const msd::DeformerTraits& t) { return t.solve == msd::DeformerSolve::Linear ? "linear" : "iterative"; },
-          "'linear': a frame is a fixed linear map of the handle data; 'iterative': iterations from an initial guess")
+          [](const msd::DeformerTraits& t) {
+            return t.solve == msd::DeformerSolve::Linear ? "linear" : "iterative";
+          },
+          "'linear': a frame is a fixed linear map of the handle data; 'iterative': iterations from an "
+          "initial guess")
       .def_readonly("vertex_targets", &msd::DeformerTraits::vertex_targets, "accepts deform_to(targets)")
       .def_readonly("initial_guess", &msd::DeformerTraits::initial_guess, "accepts set_initial_guess(X)")
-      .def_readonly("exact_constraints", &msd::DeformerTraits::exact_constraints,
-                    "fixed vertices stay and handle vertices reach T_k p exactly (to round-off); False: met in the "
-                    "least-squares sense, frame_report.constraint_error says how closely")
+      .def_readonly(
+          "exact_constraints", &msd::DeformerTraits::exact_constraints,
+          "fixed vertices stay and handle vertices reach T_k p exactly (to round-off); False: met in the "
+          "least-squares sense, frame_report.constraint_error says how closely")
       .def_readonly("reproduces_rigid_motions", &msd::DeformerTraits::reproduces_rigid_motions,
                     "one rigid motion of every constrained vertex moves the whole shape by it")
+      .def_readonly("cotan_laplacian", &msd::DeformerTraits::cotan_laplacian,
+                    "a surface method that weighs the mesh with the cotan Laplacian (prepare warns where its "
+                    "zero-area and needle triangles cut the surface)")
       .def("as_dict",
            [](const msd::DeformerTraits& t) {
              py::dict d;
@@ -709,6 +720,7 @@ void bind_deformer(py::module_& m) {
              d["initial_guess"] = t.initial_guess;
              d["exact_constraints"] = t.exact_constraints;
              d["reproduces_rigid_motions"] = t.reproduces_rigid_motions;
+             d["cotan_laplacian"] = t.cotan_laplacian;
              return d;
            })
       .def("__repr__", [](py::handle self) {

@@ -57,6 +57,8 @@ expect_error 2 "unknown subcommand 'foo'; the subcommands are info, scene, defor
 expect_error 2 "--def is not an option of decompose (deform, compare, view take it)" "$msdeform" decompose lift.off --def lift.def -o b.ply
 expect_error 2 "--translate is not an option of render (deform, compare, view take it)" \
   "$msdeform" render lift.off --sel lift.sel --translate=0,0,1 -o b.png
+expect_error 2 "--translate is not an option of render (deform, compare, view take it)" \
+  "$msdeform" render --scene lift --translate 0,0,1 -o b.png  # its value was taken for the mesh
 # An output path that is an existing folder without an extension said "unknown format ''".
 mkdir -p out-folder
 expect_error 1 "out-folder is a folder; give a mesh file name" "$msdeform" deform --scene lift -o out-folder

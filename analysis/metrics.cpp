@@ -311,6 +311,7 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
   check_mesh_arrays(rest, F, who);
   ShapeChange c;
   long stretched = 0;
+  const double shortest = 1e-6 * bounding_box_diagonal(rest);
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     // Each edge with a free vertex or between vertices placed by different transforms (fixed and a
     // handle, two handles: torn apart by the edit), seen from its triangles: an interior edge is seen twice,
@@ -319,7 +320,7 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
       const int i = F(f, k), j = F(f, (k + 1) % 3);
       if (region.placed_together(i, j)) continue;
       const double l = (rest.row(i) - rest.row(j)).norm(), l1 = (deformed.row(i) - deformed.row(j)).norm();
-      if (!(l > 0)) continue;
+      if (!(l > shortest)) continue;
       const double factor = l1 > 0 ? std::max(l1 / l, l / l1) : INFINITY;
       ++c.edges;
       stretched += factor > 1.5;

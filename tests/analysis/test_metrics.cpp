@@ -376,6 +376,16 @@ TEST_CASE("shape change: lengths, area and volume around the free region, and wh
   CHECK(t.largest_factor > 5);
   CHECK(t.largest_vertex == 100);
   CHECK_THAT(shape_change_warning(t), Contains("an edge at vertex 100 stretched or shrank"));
+  // An edge of 1e-7 (a sliver column in a scan) widened to 5e-7 by rounding-sized motion is not a tear: it
+  // read "stretched 5 times". A corner of face 0 is put 1e-7 from another and moved away by 4e-7.
+  {
+    Positions near = s.P, shifted;
+    const int a = s.F(0, 0), b = s.F(0, 1);
+    near.row(b) = near.row(a) + 1e-7 * (s.P.row(b) - s.P.row(a)).normalized();
+    shifted = near;
+    shifted.row(b) += 4e-7 * (s.P.row(b) - s.P.row(a)).normalized();
+    CHECK(shape_change(near, shifted, s.F, region).largest_factor < 1.5);
+  }
   // Edges within one rigidly placed group do not count: all fixed, nothing measured.
   const ShapeChange none = shape_change(s.P, torn, s.F, Region(static_cast<int>(s.P.rows()), Region::kFixed));
   CHECK(none.edges == 0);

@@ -102,9 +102,11 @@ std::string address_space_message(const BlasRoom& room, const char* who, const s
                                   double need_mb) {
   char numbers[200];
   std::snprintf(numbers, sizeof numbers, "%.0f MB leaves %.0f MB, and ", room.limit_mb, room.left_mb);
-  char raise[120];
-  std::snprintf(raise, sizeof raise, " needs %.0f MB: raise the limit to at least %.0f MB", need_mb,
-                room.limit_mb - room.left_mb + need_mb);
+  char raise[160];
+  std::snprintf(raise, sizeof raise,
+                " needs %.0f MB: raise the limit to at least %.0f MB (this step's need; "
+                "later ones may need more)",
+                need_mb, room.limit_mb - room.left_mb + need_mb);
   return std::string(who) + ": the address-space limit (ulimit -v) of " + numbers + what + raise;
 }
 

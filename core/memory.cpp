@@ -19,4 +19,13 @@ void retain_freed_memory() {
   mallopt(M_TOP_PAD, 256 << 20);          // ... and grow it in 256 MiB steps.
 }
 
+std::string out_of_memory_message(const std::string& what) {
+  rlimit limit;
+  if (what.find("out of memory") == std::string::npos || what.find("ulimit") != std::string::npos ||
+      getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY)
+    return what;
+  return what + " under the address-space limit (ulimit -v) of " + std::to_string(limit.rlim_cur >> 20) +
+         " MB: raise the limit";
+}
+
 }  // namespace msd

@@ -3,6 +3,7 @@
 //! machine's memory for refusing work that cannot fit.
 
 #include <cstdint>
+#include <string>
 
 namespace msd {
 
@@ -20,5 +21,10 @@ std::uint64_t physical_memory();
 //! Call once at program start (the msdeform tool and the benchmarks do); a library never calls it on its
 //! own (Python scripts may, with msdeform.retain_freed_memory()).
 void retain_freed_memory();
+
+//! An error message `what`; where it says "out of memory" under an address-space limit it does not name,
+//! followed by " under the address-space limit (ulimit -v) of N MB: raise the limit" (the likelier cause
+//! than the machine's memory).
+std::string out_of_memory_message(const std::string& what);
 
 }  // namespace msd

@@ -69,15 +69,6 @@ bool thread_start_failed(const std::exception& e) {
   return std::string_view(e.what()).find("pthread_create") != std::string_view::npos;
 }
 
-// " under the address-space limit (ulimit -v) of N MB: raise the limit" after an "out of memory" where
-// such a limit is set (the likelier cause than the machine's memory), else "".
-std::string under_the_limit() {
-  rlimit limit;
-  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return {};
-  return " under the address-space limit (ulimit -v) of " + std::to_string(limit.rlim_cur >> 20) +
-         " MB: raise the limit";
-}
-
 // "--def is not an option of decompose (deform, compare, view take it)" for the first option on the command
 // line that the chosen subcommand lacks and others have (CLI11 says only "The following arguments were
 // not expected"), else "".
@@ -167,16 +158,10 @@ int main(int argc, char** argv) {
     // --help and --version exit 0; a usage error (unknown option, bad value) exits 2, as other tools do.
     return app.exit(e) == 0 ? 0 : 2;
   } catch (const msd::Error& e) {
-    const std::string_view what = e.what();
-    std::cerr << "msdeform: error: " << what
-              << (what.find("out of memory") != std::string_view::npos &&
-                          what.find("ulimit") == std::string_view::npos
-                      ? under_the_limit()
-                      : "")
-              << "\n";
+    std::cerr << "msdeform: error: " << msd::out_of_memory_message(e.what()) << "\n";
     return 1;
   } catch (const std::bad_alloc&) {
-    std::cerr << "msdeform: error: out of memory" << under_the_limit() << "\n";
+    std::cerr << "msdeform: error: " << msd::out_of_memory_message("out of memory") << "\n";
     return 1;
   } catch (const std::filesystem::filesystem_error& e) {  // a path that cannot even be examined
     std::cerr << "msdeform: error: " << e.path1().string() << ": " << e.code().message() << "\n";

@@ -86,18 +86,21 @@ void register_exceptions(py::module_& m) {
     const Exceptions& x = exceptions();
     try {
       std::rethrow_exception(p);
+    } catch (const std::bad_alloc&) {  // pybind11 says "std::bad_alloc"
+      PyErr_SetString(PyExc_MemoryError, msd::out_of_memory_message("out of memory").c_str());
     } catch (const msd::InvalidInput& e) {
       PyErr_SetString(x.invalid_input, e.what());
     } catch (const msd::TopologyError& e) {
       PyErr_SetString(x.topology, e.what());
     } catch (const msd::SolverError& e) {
-      py::object instance = py::reinterpret_borrow<py::object>(x.solver)(e.what());
+      py::object instance =
+          py::reinterpret_borrow<py::object>(x.solver)(msd::out_of_memory_message(e.what()));
       instance.attr("index") = e.index() >= 0 ? py::object(py::int_(e.index())) : py::object(py::none());
       PyErr_SetObject(x.solver, instance.ptr());
     } catch (const msd::UsageError& e) {
       PyErr_SetString(x.usage, e.what());
     } catch (const msd::Error& e) {
-      PyErr_SetString(x.error, e.what());
+      PyErr_SetString(x.error, msd::out_of_memory_message(e.what()).c_str());
     }
   });
 }

@@ -3,7 +3,11 @@ transforms), options, frames, the no-copy output, the GIL, and the errors."""
 
 import copy
 import json
+import os
 import pickle
+import resource
+import subprocess
+import sys
 import threading
 import time
 import warnings
@@ -462,6 +466,18 @@ def test_retain_freed_memory_serves_large_arrays_from_the_heap(lift):
     shell = msdeform.Deformer("shell")
     shell.prepare(V, F, labels)
     assert np.isfinite(shell.deform(transforms)).all()
+
+
+def test_out_of_memory_names_the_address_space_limit():
+    # Under ulimit -v, Python said "std::bad_alloc" (or msdeform's "out of memory") without the limit.
+    code = ("import msdeform\ntry:\n    msdeform.scene('lift', 20_000_000)\n"
+            "except MemoryError as e:\n    print('MemoryError:', e)\n")
+    limit = 600 << 20
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                            env=dict(os.environ, OPENBLAS_NUM_THREADS="1"),  # no BLAS worker (README)
+                            preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (limit, limit)))
+    assert result.stdout.strip() == ("MemoryError: out of memory under the address-space limit (ulimit -v) of "
+                                     "600 MB: raise the limit"), result.stderr
 
 
 def test_a_mirrored_or_collapsed_handle_is_warned_about(prepared):

@@ -161,7 +161,7 @@ def region(V, fixed=None, handles=(), others="free"):
     selector per handle; a single array or callable is one handle). others: what the unselected vertices
     are, 'free' (default) or 'fixed'.
 
-    Raises ValueError when a handle selects nothing, a vertex is selected twice (fixed and a handle, or
+    Raises ValueError when there is no handle or a handle selects nothing, a vertex is selected twice (fixed and a handle, or
     two handles, or twice in one index array: an integer 0/1 mask is not a mask), an index is out of range
     or a mask has the wrong length; TypeError for a selector of another kind."""
     V = np.asarray(V)
@@ -178,6 +178,10 @@ def region(V, fixed=None, handles=(), others="free"):
         owner[m] = -1
     if callable(handles) or isinstance(handles, np.ndarray):
         handles = [handles]
+    if isinstance(handles, (dict, str, bytes)):
+        raise TypeError(f"handles must be a list of selectors (one per handle), got a {type(handles).__name__}")
+    if len(handles) == 0:
+        raise ValueError("region(): no handle given (handles=[...]); every edit moves at least one handle")
     for k, selector in enumerate(handles):
         what = f"handles[{k}]"
         m = _mask(selector, V, what)

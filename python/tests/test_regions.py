@@ -44,6 +44,10 @@ def test_region_errors(lift):
         msdeform.region(V, handles=[np.array([0.5])])
     with pytest.raises(ValueError, match=r"shape \(N, 3\)"):
         msdeform.region(V[:, :2])
+    with pytest.raises(ValueError, match="no handle given"):
+        msdeform.region(V, fixed=[0])
+    with pytest.raises(TypeError, match="handles must be a list of selectors .* got a dict"):
+        msdeform.region(V, handles={0: [9]})
     # An integer 0/1 mask fixed vertices 0 and 1 only (break test: 2 of 328), without a word.
     for dtype in (int, np.uint8):
         with pytest.raises(ValueError, match=r"fixed: vertex index [01] appears \d+ times .*looks like a mask: pass it "

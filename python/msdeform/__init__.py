@@ -51,7 +51,8 @@ from ._msdeform import (  # noqa: E402
     bounding_box_diagonal, build_info, count_self_intersections, detail_distortion, distance_to_reference,
     handle_error, library_version, method_options, read_def, read_dmat_groups, read_mesh, read_sel, read_soup,
     retain_freed_memory, rigidity_error, scene_names, select_blas_kernels, select_box, select_halfspace,
-    select_sphere, self_intersections, vertex_normals, volume, volume_change, write_def, write_mesh, write_sel,
+    select_sphere, self_intersections, shape_change, vertex_normals, volume, volume_change, write_def, write_mesh,
+    write_sel,
 )
 from ._helpers import (  # noqa: E402
     Edit, MethodInfo, constrained_vertices, handle_vertices, identity, load_edit, methods, region, rotation,
@@ -77,7 +78,7 @@ __all__ = [
     # scenes
     "scene", "scene_names", "ControlMesh",
     # metrics
-    "handle_error", "rigidity_error", "detail_distortion", "volume", "volume_change",
+    "handle_error", "rigidity_error", "detail_distortion", "shape_change", "volume", "volume_change",
     "count_self_intersections", "self_intersections", "distance_to_reference", "bounding_box_diagonal",
     "vertex_normals", "Stats", "RigidityError", "DetailDistortion", "ReferenceDistance",
     # errors and warnings

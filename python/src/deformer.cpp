@@ -658,7 +658,8 @@ PyDeformer::PyDeformer(const std::string& name, const py::kwargs& options) : met
 
 py::object not_measured(double x) { return x < 0 ? py::object(py::none()) : py::object(py::float_(x)); }
 
-const char* kDeformerDoc = R"doc(A deformation method of the catalogue (msdeform.methods()), prepared once per shape
+const char* kDeformerDoc =
+    R"doc(A deformation method of the catalogue (msdeform.methods()), prepared once per shape
 and region and then driven frame by frame.
 
 Deformer(name, **options): name is a catalogue name ('shell', 'arap', 'multiscale-normal', ...);
@@ -678,7 +679,8 @@ order), and is writable.
 prepare() and the frames release the GIL. A Deformer is not thread-safe: a second thread calling it
 while it works gets a RuntimeError. Warnings of prepare() and of each frame (folds, no convergence,
 missed constraints) are issued as msdeform.MsdeformWarning and stay readable in prepare_warnings and
-frame_report.warnings.)doc";
+frame_report.warnings. A frame does not check the result's proportions (O(#F)): msdeform.shape_change()
+does what the tool's report does (stretched edges, area and volume change, and its warning).)doc";
 
 }  // namespace
 

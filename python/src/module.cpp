@@ -670,6 +670,38 @@ and the normal-displacement heights over the two bases are compared. Returns a D
 region without free vertices, or a free region that fairing shrinks (its faired base keeps less than half
 of its area: a long tube free between its ends); msdeform.SolverError if a fairing fails.)doc");
   m.def(
+      "shape_change",
+      [](PositionsArg rest, PositionsArg deformed, FacesArg F, LabelsArg labels, py::object transforms) {
+        const msd::Positions R = to_positions(rest, "rest");
+        const msd::Positions D = to_positions(deformed, "deformed", R.rows());
+        const msd::Faces T = to_faces(F, "F", R.rows());
+        const msd::Region region = region_of(labels, R.rows());
+        const bool scales = !transforms.is_none() && msd::edit_scales(to_transforms(transforms));
+        const msd::ShapeChange c = msd::shape_change(R, D, T, region);
+        const std::string warning = msd::shape_change_warning(c, scales);
+        py::dict d;
+        d["edges"] = c.edges;
+        d["stretched_share"] = c.stretched_share;
+        d["largest_factor"] = c.largest_factor;
+        d["largest_vertex"] =
+            c.largest_vertex >= 0 ? py::object(py::int_(c.largest_vertex)) : py::object(py::none());
+        d["area_ratio"] = c.area_ratio;
+        d["volume_change"] =
+            c.volume_change ? py::object(py::float_(*c.volume_change)) : py::object(py::none());
+        d["warning"] = warning.empty() ? py::object(py::none()) : py::object(py::str(warning));
+        return d;
+      },
+      py::arg("rest"), py::arg("deformed"), py::arg("F"), py::arg("labels"),
+      py::arg("transforms") = py::none(),
+      R"doc(The shape check of `msdeform deform`'s report, which a frame does not make (it is O(#F)): a dict
+with edges (the edges measured: those with a free vertex, or between differently placed vertices),
+stretched_share (of those, the share whose length changed beyond 1.5x), largest_factor and largest_vertex
+(the largest change max(l'/l, l/l') and a vertex of that edge), area_ratio (of the triangles with a free
+vertex), volume_change (closed meshes, else None) and warning (the tool's warning text where an edge
+changed beyond 5x, the area beyond 1.5x or below 2/3, or the volume by over 30 %; None otherwise). rest,
+deformed (#V, 3); F (#F, 3); labels (#V,) codes; transforms: the edit's, so that area and volume changes
+a scaling asks for are not warned about (None: none scales). Raises ValueError for mismatched shapes.)doc");
+  m.def(
       "volume",
       [](PositionsArg V, FacesArg F) {
         const msd::Positions P = to_positions(V, "V");

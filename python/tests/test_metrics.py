@@ -34,6 +34,25 @@ def test_handle_error_is_the_largest_constraint_miss(lift):
         msdeform.handle_error(V, moved[:-1], labels, transforms)
 
 
+def test_shape_change_is_the_tools_check():
+    # A frame checks no proportions (the tool's report did, O(#F)): shape_change gives Python the same
+    # numbers and warning, so a shell torn by a bend is told from ARAP's.
+    V, F, labels, T = msdeform.scene("bend120", 2000)
+    results = {}
+    for name in ("shell", "arap"):
+        d = msdeform.Deformer(name)
+        d.prepare(V, F, labels)
+        results[name] = msdeform.shape_change(V, d.deform(T), F, labels, T)
+    assert results["shell"]["largest_factor"] > 5 and results["shell"]["largest_vertex"] is not None
+    assert "does not keep the shape's proportions" in results["shell"]["warning"]
+    assert results["arap"]["largest_factor"] < 1.5 and results["arap"]["warning"] is None
+    assert results["arap"]["volume_change"] is None  # an open plane
+    doubled = msdeform.shape_change(V, 2 * V, F, labels, [msdeform.scaling(2)])
+    assert doubled["area_ratio"] == pytest.approx(4) and doubled["warning"] is None  # the edit asks for it
+    with pytest.raises(ValueError):
+        msdeform.shape_change(V, V[:-1], F, labels)
+
+
 def test_rigidity_error_of_rigid_and_scaled_shapes(lift):
     V, F, _, _ = lift
     T = msdeform.rotation((1, 1, 0), 70, about=(0.3, 0.2, 0.1)) @ msdeform.translation((1, 2, 3))

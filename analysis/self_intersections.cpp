@@ -81,4 +81,36 @@ int count_self_intersections(const Positions& P, const Faces& F, std::vector<std
   return count;
 }
 
+AddedSelfIntersections::AddedSelfIntersections(const Positions& rest, const Faces& F) : F_(F) {
+  constexpr int kMostFaces = 10000;
+  std::vector<int> around(static_cast<size_t>(rest.rows()), 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (F(f, k) >= 0 && F(f, k) < rest.rows())
+        ++around[static_cast<size_t>(F(f, k))];  // bad ones: the count's error
+  const auto most = std::max_element(around.begin(), around.end());
+  if (most != around.end() && *most > kMostFaces)
+    throw InvalidInput(
+        "vertex " + std::to_string(most - around.begin()) + " lies on " + std::to_string(*most) +
+        " faces, which CGAL would test pairwise (minutes to hours per count); remesh so that no "
+        "vertex has thousands of neighbours, or skip the count");
+  std::vector<std::pair<int, int>> pairs;
+  rest_pairs_ = count_self_intersections(rest, F, &pairs);
+  touching_at_rest_.assign(static_cast<size_t>(F.rows()), 0);
+  for (const auto& [f, g] : pairs) touching_at_rest_[f] = touching_at_rest_[g] = 1;
+}
+
+int AddedSelfIntersections::count(const Positions& result, std::vector<int>* faces) const {
+  std::vector<std::pair<int, int>> pairs;
+  count_self_intersections(result, F_, &pairs);
+  int added = 0;
+  if (faces) faces->clear();
+  for (const auto& [f, g] : pairs) {
+    if (touching_at_rest_[f] || touching_at_rest_[g]) continue;
+    ++added;
+    if (faces) faces->push_back(f), faces->push_back(g);
+  }
+  return added;
+}
+
 }  // namespace msd

@@ -26,4 +26,24 @@ int count_self_intersections(const Positions& P, const Faces& F,
                              std::vector<std::pair<int, int>>* pairs = nullptr,
                              int* degenerate_faces = nullptr);
 
+//! The self-intersecting pairs an edit adds to a rest shape that may intersect itself already (a scan's
+//! arm along its torso): a result's pair counts unless one of its faces is in a pair at rest (such contacts
+//! slide). The constructor counts the rest's pairs once; each count() is one CGAL run.
+class AddedSelfIntersections {
+ public:
+  //! rest: #V×3, F: #F×3. 	hrow InvalidInput as count_self_intersections, and for a vertex on more than
+  //! 10000 faces: CGAL tests the faces around a vertex pairwise (a flat fan of 16000 faces took 45 s per
+  //! count, one of 47000 an hour).
+  AddedSelfIntersections(const Positions& rest, const Faces& F);
+  int rest_pairs() const { return rest_pairs_; }
+  //! The pairs of result (#V×3, on F) the edit added; their faces (rows of F, a face once per pair) into
+  //! *faces if given. 	hrow InvalidInput as count_self_intersections.
+  int count(const Positions& result, std::vector<int>* faces = nullptr) const;
+
+ private:
+  Faces F_;
+  int rest_pairs_ = 0;
+  std::vector<char> touching_at_rest_;  // per face: in a pair at rest
+};
+
 }  // namespace msd

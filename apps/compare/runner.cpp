@@ -25,22 +25,6 @@ std::string format(const char* fmt, double x) {
   return buf;
 }
 
-// CGAL's count tests every two faces whose boxes overlap, and all faces around a vertex do: the k faces
-// of a fan take k²/2 exact tests (a flat 16000-face fan about 45 s per count, a 47000-face one an hour).
-// Beyond 10000 around one vertex the count is refused, so that compare does not seem to hang.
-void refuse_fans(Eigen::Index vertices, const Faces& F) {
-  constexpr int kMostFaces = 10000;
-  std::vector<int> faces(static_cast<size_t>(vertices), 0);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k)
-      if (F(f, k) >= 0 && F(f, k) < vertices) ++faces[static_cast<size_t>(F(f, k))];  // bad ones: the count's error
-  const auto most = std::max_element(faces.begin(), faces.end());
-  if (most != faces.end() && *most > kMostFaces)
-    throw InvalidInput("vertex " + std::to_string(most - faces.begin()) + " lies on " + std::to_string(*most) +
-                       " faces, which CGAL would test pairwise (minutes to hours per result); remesh so that no "
-                       "vertex has thousands of neighbours, or skip the count with --no-self-intersections");
-}
-
 // What went wrong, for a result's page: std::bad_alloc's own text is "std::bad_alloc".
 std::string failure(const std::exception& e) {
   return dynamic_cast<const std::bad_alloc*>(&e) ? "out of memory" : e.what();
@@ -91,16 +75,12 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
   // it has refused them, it is not asked again.
   std::string self_intersections_refused;
   // A scan may intersect itself already: a result is judged by the pairs the edit added.
-  std::vector<std::pair<int, int>> rest_pairs;  // (f, g), f < g, sorted
-  std::vector<char> touching_at_rest;            // per face: in a rest pair (its contacts may slide)
+  std::optional<AddedSelfIntersections> added;
   if (options.self_intersections && has_faces) {
     try {
-      refuse_fans(rest.rows(), F);
-      count_self_intersections(rest, F, &rest_pairs);
-      touching_at_rest.assign(static_cast<size_t>(F.rows()), 0);
-      for (const auto& [f, g] : rest_pairs) touching_at_rest[f] = touching_at_rest[g] = 1;
+      added.emplace(rest, F);
     } catch (const InvalidInput& e) {
-      self_intersections_refused = e.what();
+      self_intersections_refused = std::string(e.what()) + " (--no-self-intersections)";
     }
   }
   std::vector<MethodResult> results;
@@ -166,16 +146,8 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
       if (options.self_intersections && has_faces) {
         if (self_intersections_refused.empty()) {
           try {
-            std::vector<std::pair<int, int>> pairs;
-            count_self_intersections(r.result, F, &pairs);
-            r.self_intersections = 0;
-            r.rest_self_intersections = static_cast<int>(rest_pairs.size());
-            for (const auto& [f, g] : pairs) {
-              // A pair with a face that intersected at rest is the input's contact, slid (an arm along a torso).
-              if (touching_at_rest[f] || touching_at_rest[g]) continue;
-              ++r.self_intersections;
-              r.self_intersecting_faces.push_back(f), r.self_intersecting_faces.push_back(g);
-            }
+            r.self_intersections = added->count(r.result, &r.self_intersecting_faces);
+            r.rest_self_intersections = added->rest_pairs();
           } catch (const InvalidInput& e) {
             self_intersections_refused = e.what();  // the faces, as the result is finite: so for every result
           } catch (const std::exception& e) {

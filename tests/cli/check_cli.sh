@@ -123,6 +123,16 @@ grep -q "warning: the result does not keep the shape's proportions: an edge at v
   { cat err.txt; fail "the shell's torn bend was not warned about"; }
 "$msdeform" deform --scene bend120 --resolution 2k --method arap -o a.off >out.txt 2>err.txt || fail "arap bend"
 grep -q "proportions" err.txt && { cat err.txt; fail "ARAP's bend was warned about"; }
+# Self-intersections the edit added are counted and warned about (no single run counted them: ARAP added
+# 76 pairs to a camel with exit 0 and no word); --no-self-intersections skips the count.
+"$msdeform" deform --scene bar-twist135 --resolution 2k --method shell -o twisted.off >out.txt 2>err.txt ||
+  fail "shell twist"
+grep -q "self-intersections: [1-9][0-9]* face pair(s) added by the edit (0 at rest)" out.txt || { cat out.txt; fail "no count"; }
+grep -q "warning: the result intersects itself: .* msdeform render twisted.off --color selfint shows them" err.txt ||
+  { cat err.txt; fail "no self-intersection warning"; }
+"$msdeform" deform --scene bar-twist135 --resolution 2k --method shell --no-self-intersections -o twisted.off \
+  >out.txt 2>err.txt || fail "shell twist without the count"
+grep -q "self-intersections" out.txt err.txt && { cat out.txt err.txt; fail "--no-self-intersections counted"; }
 # With no free vertex the shape line spoke of "100 % of the free region's edges", and the warning blamed
 # large rotations rather than the missing free region (which the prepare warning names).
 "$msdeform" scene lift --resolution 2k -o nofree >/dev/null

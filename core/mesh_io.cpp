@@ -754,6 +754,18 @@ PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, i
     return apex == 0 ? PolygonSplit::Fan : PolygonSplit::Other;
   };
   const double first = fan_shape(0);
+  // A flat convex polygon whose first fan has no sliver keeps it without the search (a mesh of 1000 circles
+  // of 100 corners loaded in 4.5 s with it, 0.1 s without): every other split is as flat, and none is
+  // needed to avoid a sliver.
+  bool convex = true, flat = true;
+  double extent = 0;
+  for (int k = 0; k < n; ++k) extent = std::max(extent, (points[corner[k]] - points[corner[0]]).norm());
+  const Vec3 axis = normal.normalized();
+  for (int k = 0; k < n && (convex || flat); ++k) {
+    convex = convex && turn((k + n - 1) % n, k, (k + 1) % n) > 0;
+    flat = flat && std::abs((points[corner[k]] - points[corner[0]]).dot(axis)) <= 1e-3 * extent;
+  }
+  if (convex && flat && first >= 1e-2) return fan(0);
   if (n <= kOptimalCorners) {
     // best[i][j]: the largest worst-triangle shape of a split of the sub-polygon i, i+1, ..., j closed by
     // the diagonal (i, j); 0 where there is none. A diagonal joins two corners through the polygon's inside:
@@ -781,8 +793,8 @@ PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, i
     std::vector<char> usable(n * n, 0);  // an edge of the polygon or a diagonal
     for (int i = 0; i < n; ++i)
       for (int j = i + 1; j < n; ++j)
-        usable[i * n + j] =
-            j == i + 1 || (i == 0 && j == n - 1) || (inside(i, j) && inside(j, i) && !crosses(i, j));
+        usable[i * n + j] = convex || j == i + 1 || (i == 0 && j == n - 1) ||
+                            (inside(i, j) && inside(j, i) && !crosses(i, j));
     for (int i = 0; i + 1 < n; ++i) best[i * n + i + 1] = 1;  // an edge: nothing to split
     for (int length = 2; length < n; ++length)
       for (int i = 0; i + length < n; ++i) {

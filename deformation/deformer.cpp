@@ -116,7 +116,7 @@ namespace {
 //   not match the geometry (a one-ring squashed onto a line with its centre 1e-8 off it: the shell left the
 //   centre 0.16 behind its neighbours, exit 0), or clamped a thousandfold and more (a cotangent above 1e8:
 //   a one-ring shrunk to 1e-12, which explicit Laplacian editing left at rest). A needle here and there,
-//   as in 3 of CGAL's 145 meshes (triceratops: 2, cotangents up to 3e5; mpi_triang up to 3e6), cuts
+//   as in 3 of CGAL's 138 meshes (triceratops: 2, cotangents up to 3e5; mpi_triang up to 3e6), cuts
 //   nothing and is not warned about: the results there were sound.
 void degenerate_triangle_warnings(const Positions& P, const Faces& F, const Region& region,
                                   const std::string& who, std::vector<std::string>& warnings) {

@@ -112,12 +112,14 @@ namespace {
 //   the methods built on it (a strip of 40 collapsed triangles across a grid: one side stayed at rest while
 //   the other followed the handle, exit 0);
 // - needles with a free vertex (a corner's cotangent above LaplaceOperator::kMaxCotangent), whose weights
-//   it clamps: parts joined only through them (and zero-area ones) are tied to the rest by weights that do
-//   not match the geometry (a one-ring squashed onto a line with its centre 1e-8 off it: the shell left the
-//   centre 0.16 behind its neighbours, exit 0), or clamped a thousandfold and more (a cotangent above 1e8:
-//   a one-ring shrunk to 1e-12, which explicit Laplacian editing left at rest). A needle here and there,
-//   as in 3 of CGAL's 138 meshes (triceratops: 2, cotangents up to 3e5; mpi_triang up to 3e6), cuts
-//   nothing and is not warned about: the results there were sound.
+//   it clamps, so that the vertices there are tied to their neighbours by weights that do not match the
+//   geometry. Where they cut the surface into pieces joined only through them (and zero-area ones), or are
+//   clamped a thousandfold (a cotangent above 1e8), the pieces may be left behind (a one-ring squashed onto
+//   a line with its centre 1e-8 off it: the shell left the centre 0.16 behind its neighbours; a one-ring
+//   shrunk to 1e-12: explicit Laplacian editing left it at rest; both exit 0). Elsewhere the result near
+//   them may be distorted (a crack of 40 needles with cotangents of 2.5e6: implicit Laplacian editing lifted
+//   its rim 23 % above the handle), or may not (3 of CGAL's 138 meshes have a few needles, triceratops 2
+//   with cotangents up to 3e5: sound results): said more mildly.
 void degenerate_triangle_warnings(const Positions& P, const Faces& F, const Region& region,
                                   const std::string& who, std::vector<std::string>& warnings) {
   const int nv = static_cast<int>(P.rows());
@@ -162,7 +164,7 @@ void degenerate_triangle_warnings(const Positions& P, const Faces& F, const Regi
   if (needles == 0) return;
   const std::vector<int> had = vertex_components(with_area, nv);
   const int cut_more = pieces(well_shaped, &had);
-  if (cut_more == cut && !(sharpest > 1e3 * LaplaceOperator::kMaxCotangent)) return;
+  const bool severe = cut_more > cut || sharpest > 1e3 * LaplaceOperator::kMaxCotangent;
   char clamped[96];
   std::snprintf(clamped, sizeof clamped, " (cotangents up to %.3g, clamped to %.3g)", sharpest,
                 LaplaceOperator::kMaxCotangent);
@@ -172,8 +174,10 @@ void degenerate_triangle_warnings(const Positions& P, const Faces& F, const Regi
       std::to_string(F(first_needle, 1)) + ", " + std::to_string(F(first_needle, 2)) + ")" +
       (cut_more > cut ? " join " + std::to_string(cut_more) + " pieces only through them and" : "") + " " +
       kNeedleWarning + clamped +
-      ": methods built on it may leave the vertices there behind their neighbours; repair the mesh "
-      "there");
+      (severe ? ": methods built on it may leave the vertices there behind their neighbours; repair the mesh "
+                "there"
+              : ": the result may be distorted next to them (most with implicit Laplacian editing); repair "
+                "the mesh there if it is"));
 }
 
 }  // namespace

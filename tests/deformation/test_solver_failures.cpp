@@ -145,15 +145,33 @@ TEST_CASE(
   }
 }
 
-TEST_CASE("a needle here and there in a real mesh is not warned about", "[deformation][solver][real]") {
-  // CGAL's triceratops has 2 needles (cotangents up to 3e5) that cut nothing: the shell's result is sound.
+TEST_CASE("a needle here and there is warned about mildly", "[deformation][solver][real]") {
+  // CGAL's triceratops has 2 needles (cotangents up to 3e5) that cut nothing: the shell's result is sound,
+  // and the warning does not say vertices may be left behind. A crack of 40 needles (cotangents 2.5e6)
+  // across a grid cuts nothing either, yet implicit Laplacian editing lifted its rim 23 % above the handle
+  // without a word.
   EditCase c = load_edit_case(test::cgal_mesh("triceratops.off"), "", "");
   std::vector<int> codes(static_cast<size_t>(c.P.rows()), Region::kFree);
   for (Eigen::Index v = 0; v < c.P.rows(); ++v)
     codes[v] = c.P(v, 0) < -5 ? Region::kFixed : c.P(v, 0) > 5 ? 2 : 1;
   const auto shell = builtin_methods().make("shell");
   shell->prepare(c.P, c.F, Region::from_codes(std::move(codes)));
-  for (const std::string& w : shell->prepare_warnings()) CHECK_THAT(w, !Contains(kNeedleWarning));
+  int said = 0;
+  for (const std::string& w : shell->prepare_warnings())
+    if (w.find(kNeedleWarning) != std::string::npos) {
+      ++said;
+      CHECK_THAT(w, Contains("2 needle triangle(s)") &&
+                        Contains("the result may be distorted next to them") && !Contains("behind"));
+    }
+  CHECK(said == 1);
+  Grid grid;
+  for (int i = 6; i < 14; ++i) grid.P(i * Grid::n + 10, 1) = grid.P(i * Grid::n + 9, 1) + 1e-8;  // a crack
+  const auto laplacian = builtin_methods().make("laplacian");
+  laplacian->prepare(grid.P, grid.F, grid.region);
+  said = 0;
+  for (const std::string& w : laplacian->prepare_warnings())
+    said += w.find(kNeedleWarning) != std::string::npos;
+  CHECK(said == 1);
 }
 
 #ifdef MSD_HAVE_CHOLMOD

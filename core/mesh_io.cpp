@@ -715,8 +715,13 @@ FileContents read_contents(const std::string& path, const std::string& who) {
 // keeps its fan (its triangles are degenerate, which check_surface reports).
 enum class PolygonSplit { Fan, Other, CrossesItself };
 constexpr int kOptimalCorners = 256, kShapedFans = 1024;
+// shared (null: none): per corner, up to two other polygons with a side at it. A triangle whose three
+// corners all touch one other polygon lies on a chain of sides the two share, and is refused: two polygons
+// sharing a chain raised like a roof both closed it with the same chord (the same triangles twice: an edge
+// in 3 or 4 faces). Where that leaves no split, the polygon is split without it.
 PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, int n,
-                           std::vector<std::array<int, 3>>& out) {
+                           std::vector<std::array<int, 3>>& out,
+                           const std::vector<std::array<int, 2>>* shared = nullptr) {
   Vec3 normal = Vec3::Zero();  // Newell: twice the vector area, whatever the first corner
   for (int k = 0; k < n; ++k) normal += points[corner[k]].cross(points[corner[(k + 1) % n]]);
   if (!(normal.squaredNorm() > 0)) {  // no area: all corners on a line, or lobes that cancel (a bow tie)
@@ -735,7 +740,15 @@ PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, i
     const Eigen::Vector2d e = q[b] - q[a], f = q[c] - q[a];
     return e.x() * f.y() - e.y() * f.x();
   };
-  const auto shape = [&](int a, int b, int c) {  // ≤ 0 where turned over or flat
+  const auto on_shared_chain = [&](int a, int b, int c) {
+    for (const int other : (*shared)[a])
+      if (other >= 0 && ((*shared)[b][0] == other || (*shared)[b][1] == other) &&
+          ((*shared)[c][0] == other || (*shared)[c][1] == other))
+        return true;
+    return false;
+  };
+  const auto shape = [&](int a, int b, int c) {  // ≤ 0 where turned over or flat (or refused)
+    if (shared && on_shared_chain(a, b, c)) return 0.0;
     const Vec3 &pa = points[corner[a]], &pb = points[corner[b]], &pc = points[corner[c]];
     const double longest =
         std::max({(pb - pa).squaredNorm(), (pc - pb).squaredNorm(), (pa - pc).squaredNorm()});
@@ -844,14 +857,14 @@ PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, i
     }
     if (ear < 0) {
       out.resize(start);
-      return PolygonSplit::CrossesItself;
+      return shared ? split_polygon(points, corner, n, out) : PolygonSplit::CrossesItself;
     }
     out.push_back({corner[left[(ear + m - 1) % m]], corner[left[ear]], corner[left[(ear + 1) % m]]});
     left.erase(left.begin() + ear);
   }
   if (!(turn(left[0], left[1], left[2]) > 0)) {
     out.resize(start);
-    return PolygonSplit::CrossesItself;
+    return shared ? split_polygon(points, corner, n, out) : PolygonSplit::CrossesItself;
   }
   out.push_back({corner[left[0]], corner[left[1]], corner[left[2]]});
   return PolygonSplit::Other;
@@ -872,6 +885,17 @@ TriangleSoup triangulate(const FileContents& soup, const std::string& path, cons
   std::vector<std::array<int, 3>> triangles;
   triangles.reserve(soup.corners.size() > 2 * static_cast<size_t>(npoly) ? soup.corners.size() - 2 * npoly
                                                                          : 0);
+  // The sides of the polygons (more than 3 corners), to find the ones two of them share (split_polygon).
+  std::vector<std::pair<std::uint64_t, int>> sides;
+  for (int f = 0; f < npoly; ++f)
+    if (const int n = soup.offsets[f + 1] - soup.offsets[f]; n > 3)
+      for (int k = 0; k < n; ++k) {
+        const int* corner = soup.corners.data() + soup.offsets[f];
+        const auto [a, b] = std::minmax(corner[k], corner[(k + 1) % n]);
+        sides.push_back({std::uint64_t(std::uint32_t(a)) << 32 | std::uint32_t(b), f});
+      }
+  std::sort(sides.begin(), sides.end());
+  std::vector<std::array<int, 2>> shared;
   std::vector<int> sorted;
   for (int f = 0; f < npoly; ++f) {
     const int* corner = soup.corners.data() + soup.offsets[f];
@@ -901,7 +925,20 @@ TriangleSoup triangulate(const FileContents& soup, const std::string& path, cons
                            std::to_string((k + 1) % n) + " (vertices " + std::to_string(corner[k]) + " and " +
                            std::to_string(corner[(k + 1) % n]) +
                            ") are at the same point: merge the two vertices or drop one from the face");
-    const PolygonSplit split = split_polygon(soup.points, corner, n, triangles);
+    // Per corner, the other polygons with a side at it (the one after it, then the one before).
+    shared.assign(static_cast<size_t>(n), {-1, -1});
+    bool shares = false;
+    for (int k = 0; k < n; ++k) {
+      const auto [a, b] = std::minmax(corner[k], corner[(k + 1) % n]);
+      const std::uint64_t key = std::uint64_t(std::uint32_t(a)) << 32 | std::uint32_t(b);
+      for (auto it = std::lower_bound(sides.begin(), sides.end(), std::pair{key, -1});
+           it != sides.end() && it->first == key; ++it)
+        if (it->second != f) {
+          shared[k][0] = shared[(k + 1) % n][1] = it->second;
+          shares = true;
+        }
+    }
+    const PolygonSplit split = split_polygon(soup.points, corner, n, triangles, shares ? &shared : nullptr);
     if (split == PolygonSplit::CrossesItself)
       throw InvalidInput(who + ": " + path +
                          (soup.lines[f] > 0 ? " line " + std::to_string(soup.lines[f]) : "") + ": face " +

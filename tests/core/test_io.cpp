@@ -203,6 +203,15 @@ TEST_CASE("polygons with a corner of nearly 180 degrees split without slivers", 
   TriangleSoup roof = load_soup(tmp.file("roof.obj"));
   CHECK(roof.F.rows() == 8);
   CHECK(check_surface(roof.P, roof.F).problem().empty());
+  // Steeper, each split alone would still take the chord: two quads sharing a chain whose middle is raised
+  // by 0.3 were both split along (0, 2) (an edge in 3 faces after the duplicate was dropped).
+  std::ofstream(tmp.file("ridge.obj")) << "v 0 0 0\nv 0.5 0 0.3\nv 1 0 0\nv 0.5 0.5 0\nv 0.5 -0.5 0\n"
+                                          "f 1 2 3 4\nf 3 2 1 5\n";
+  LoadReport ridge_report;
+  TriangleSoup ridge = load_soup(tmp.file("ridge.obj"), &ridge_report);
+  CHECK(ridge.F.rows() == 4);
+  CHECK(ridge_report.duplicate_faces_dropped == 0);
+  CHECK(check_surface(ridge.P, ridge.F).problem().empty());
   // A square whose sides carry three corners each, bulged out by 1e-9: every fan had a sliver (shape 4e-10),
   // and the shell refused the mesh as singular.
   std::ostringstream square;

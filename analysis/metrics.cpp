@@ -340,15 +340,24 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
 bool edit_scales(const std::vector<Mat4>& transforms) {
   return std::any_of(transforms.begin(), transforms.end(), [](const Mat4& T) {
     const Mat3 A = T.topLeftCorner<3, 3>();
-    return !((A.transpose() * A - Mat3::Identity()).cwiseAbs().maxCoeff() <= 1e-4);
+    return !((A.transpose() * A - Mat3::Identity()).cwiseAbs().maxCoeff() <= 1e-4) || A.determinant() < 0;
   });
 }
 
-std::string shape_change_warning(const ShapeChange& c, bool edit_scales) {
+double edit_stretch(const std::vector<Mat4>& transforms) {
+  double most = 1;
+  for (const Mat4& T : transforms) {
+    const Vec3 sigma = Eigen::JacobiSVD<Mat3>(Mat3(T.topLeftCorner<3, 3>())).singularValues();
+    most = std::max({most, sigma(0), sigma(2) > 0 ? 1 / sigma(2) : INFINITY});
+  }
+  return most;
+}
+
+std::string shape_change_warning(const ShapeChange& c, bool edit_scales, double edit_stretch) {
   std::string why;
   auto add = [&](const std::string& text) { why += (why.empty() ? "" : ", ") + text; };
   char text[160];
-  if (c.largest_factor > 5) {
+  if (c.largest_factor > 5 * edit_stretch) {
     std::snprintf(text, sizeof text, "an edge at vertex %d stretched or shrank %.3g times", c.largest_vertex,
                   c.largest_factor);
     add(text);

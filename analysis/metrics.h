@@ -202,18 +202,26 @@ struct ShapeChange {
 //! amounts that read as large factors (a 1e-7 column widened to 5e-7 read "stretched 5.1 times"). O(#F). \throw InvalidInput for differing row counts or an index out of range.
 ShapeChange shape_change(const Positions& rest, const Positions& deformed, const Faces& F, const Region& region);
 
-//! Empty, or why the result lost the shape: an edge stretched or shrunk by more than 5× (tears and
-//! collapses; on the built-in benchmark the shell, Laplacian editing, lattice and cages do this under bends
-//! and twists, ARAP, gradient editing and deformation transfer stay below 4.5×), the free region's area
-//! changed by more than 1.5× or below 2/3, or a closed mesh's volume changed by more than 30 %. An edit that
-//! scales a handle (edit_scales) asks for area and volume to change: then only the edges count.
-std::string shape_change_warning(const ShapeChange& change, bool edit_scales = false);
+//! Empty, or why the result lost the shape: an edge stretched or shrunk by more than 5× the edit's own
+//! stretch (edit_stretch: 1 for rigid handles; tears and collapses; on the built-in benchmark the shell,
+//! Laplacian editing, lattice and cages do this under bends and twists, ARAP, gradient editing and
+//! deformation transfer stay below 4.5×), the free region's area changed by more than 1.5× or below 2/3, or
+//! a closed mesh's volume changed by more than 30 %. An edit that scales or mirrors a handle (edit_scales)
+//! asks for area and volume to change: then only the edges count.
+std::string shape_change_warning(const ShapeChange& change, bool edit_scales = false,
+                                 double edit_stretch = 1);
 
-//! True when a handle transform (4×4 affine, rows of `transforms`) scales or shears: its linear part A has
-//! AᵀA differing from I by more than 1e-4 in some entry. Such an edit asks for area and volume to change. A
-//! rotation written with 6 digits (the survey's .def files) has AᵀA = I to about 1e-6: not a scaling (a
-//! tolerance of 1e-9 took the survey cylinder's bend for one and silenced its −51 % volume).
+//! True when a handle transform (4×4 affine, rows of `transforms`) scales, shears or mirrors: its linear
+//! part A has AᵀA differing from I by more than 1e-4 in some entry, or a negative determinant. Such an edit
+//! asks for area and volume to change (a mirror turns the volume's sign). A rotation written with 6 digits
+//! (the survey's .def files) has AᵀA = I to about 1e-6: not a scaling (a tolerance of 1e-9 took the survey
+//! cylinder's bend for one and silenced its −51 % volume).
 bool edit_scales(const std::vector<Mat4>& transforms);
+
+//! How much the handle transforms themselves stretch or shrink: the largest of 1, their singular values and
+//! the inverses of their smallest (inf for a singular one). A uniform scale by 10 stretches every edge 10
+//! times, as asked: shape_change_warning then warns only beyond 50.
+double edit_stretch(const std::vector<Mat4>& transforms);
 
 // ---------------------------------------------------------------------------------------------------
 // All metrics of one edit

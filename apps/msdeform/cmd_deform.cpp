@@ -227,10 +227,12 @@ void add_deform_command(CLI::App& app) {
           std::printf("  self-intersections: %d face pair(s) added by the edit (%d at rest)\n", n,
                       added.rest_pairs());
           if (n > 0)
-            intersections = "the result intersects itself: " + std::to_string(n) +
-                            " face pair(s) the input did not have (the first: faces " +
-                            std::to_string(faces[0]) + " and " + std::to_string(faces[1]) +
-                            "); msdeform render " + *output + " --color selfint shows them";
+            // render does not weld: after --weld it would count the seam's contacts too.
+            intersections =
+                "the result intersects itself: " + std::to_string(n) +
+                " face pair(s) the input did not have (the first: faces " + std::to_string(faces[0]) +
+                " and " + std::to_string(faces[1]) + ")" +
+                (c.weld ? std::string() : "; msdeform render " + *output + " --color selfint shows them");
         } catch (const InvalidInput& e) {  // a soup or a non-manifold input: CGAL's count needs a surface
           std::printf("  self-intersections: not counted (%s)\n", e.what());
         }
@@ -241,7 +243,9 @@ void add_deform_command(CLI::App& app) {
     if (!intersections.empty()) std::fprintf(stderr, "warning: %s\n", intersections.c_str());
     const bool scales = edit_scales(c.transforms);  // asks for area and volume to change
     // Without a free vertex the prepare warning on torn edges says why they stretch.
-    if (const std::string w = has_free ? shape_change_warning(shape, scales) : std::string(); !w.empty())
+    if (const std::string w =
+            has_free ? shape_change_warning(shape, scales, edit_stretch(c.transforms)) : std::string();
+        !w.empty())
       std::fprintf(stderr, "warning: %s%s\n", w.c_str(),
                    deformer->name() == "arap" ? "; more ARAP iterations or a larger fixed region may help"
                                               : "; arap keeps the proportions best");

@@ -178,10 +178,13 @@ def region(V, fixed=None, handles=(), others="free"):
         owner[m] = -1
     if callable(handles) or isinstance(handles, np.ndarray):
         handles = [handles]
-    if isinstance(handles, (dict, str, bytes)):
+    if not isinstance(handles, (list, tuple)):
         raise TypeError(f"handles must be a list of selectors (one per handle), got a {type(handles).__name__}")
     if len(handles) == 0:
         raise ValueError("region(): no handle given (handles=[...]); every edit moves at least one handle")
+    if all(isinstance(h, (int, np.integer)) for h in handles):
+        raise TypeError(f"handles is a list of selectors, one per handle, and {list(handles)[:4]} is a list of "
+                        f"ints: one handle with these vertices is handles=[{list(handles)[:4]}]")
     for k, selector in enumerate(handles):
         what = f"handles[{k}]"
         m = _mask(selector, V, what)

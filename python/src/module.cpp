@@ -676,9 +676,15 @@ of its area: a long tube free between its ends); msdeform.SolverError if a fairi
         const msd::Positions D = to_positions(deformed, "deformed", R.rows());
         const msd::Faces T = to_faces(F, "F", R.rows());
         const msd::Region region = region_of(labels, R.rows());
-        const bool scales = !transforms.is_none() && msd::edit_scales(to_transforms(transforms));
+        const std::vector<msd::Mat4> asked =
+            transforms.is_none() ? std::vector<msd::Mat4>() : to_transforms(transforms);
+        if (!transforms.is_none() && static_cast<int>(asked.size()) != region.num_handles())
+          throw py::value_error("transforms has " + std::to_string(asked.size()) + " matrices for " +
+                                std::to_string(region.num_handles()) + " handle(s) in labels");
+        if (T.rows() == 0) throw py::value_error("F has no faces: there is no shape to measure");
         const msd::ShapeChange c = msd::shape_change(R, D, T, region);
-        const std::string warning = msd::shape_change_warning(c, scales);
+        const std::string warning =
+            msd::shape_change_warning(c, msd::edit_scales(asked), msd::edit_stretch(asked));
         py::dict d;
         d["edges"] = c.edges;
         d["stretched_share"] = c.stretched_share;
@@ -699,8 +705,10 @@ stretched_share (of those, the share whose length changed beyond 1.5x), largest_
 (the largest change max(l'/l, l/l') and a vertex of that edge), area_ratio (of the triangles with a free
 vertex), volume_change (closed meshes, else None) and warning (the tool's warning text where an edge
 changed beyond 5x, the area beyond 1.5x or below 2/3, or the volume by over 30 %; None otherwise). rest,
-deformed (#V, 3); F (#F, 3); labels (#V,) codes; transforms: the edit's, so that area and volume changes
-a scaling asks for are not warned about (None: none scales). Raises ValueError for mismatched shapes.)doc");
+deformed (#V, 3); F (#F, 3), at least one face; labels (#V,) codes; transforms: the edit's, one per
+handle, so that the stretch, area and volume changes a scaling or mirror asks for are not warned about
+(None: no handle scales). Raises ValueError for mismatched shapes, no face, or a transform count other
+than the handles'.)doc");
   m.def(
       "volume",
       [](PositionsArg V, FacesArg F) {

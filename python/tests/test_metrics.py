@@ -49,8 +49,14 @@ def test_shape_change_is_the_tools_check():
     assert results["arap"]["volume_change"] is None  # an open plane
     doubled = msdeform.shape_change(V, 2 * V, F, labels, [msdeform.scaling(2)])
     assert doubled["area_ratio"] == pytest.approx(4) and doubled["warning"] is None  # the edit asks for it
+    ten = msdeform.shape_change(V, 10 * V, F, labels, [msdeform.scaling(10)])
+    assert ten["largest_factor"] == pytest.approx(10) and ten["warning"] is None  # asked for (it warned)
     with pytest.raises(ValueError):
         msdeform.shape_change(V, V[:-1], F, labels)
+    with pytest.raises(ValueError, match="2 matrices for 1 handle"):
+        msdeform.shape_change(V, V, F, labels, [msdeform.scaling(2)] * 2)
+    with pytest.raises(ValueError, match="no faces"):
+        msdeform.shape_change(V, V, F[:0], labels)
 
 
 def test_rigidity_error_of_rigid_and_scaled_shapes(lift):

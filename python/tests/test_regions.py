@@ -48,6 +48,10 @@ def test_region_errors(lift):
         msdeform.region(V, fixed=[0])
     with pytest.raises(TypeError, match="handles must be a list of selectors .* got a dict"):
         msdeform.region(V, handles={0: [9]})
+    with pytest.raises(TypeError, match="got a NoneType"):
+        msdeform.region(V, handles=None)
+    with pytest.raises(TypeError, match=r"is a list of ints: one handle with these vertices is handles=\[\[2, 3\]\]"):
+        msdeform.region(V, handles=[2, 3])
     # An integer 0/1 mask fixed vertices 0 and 1 only (break test: 2 of 328), without a word.
     for dtype in (int, np.uint8):
         with pytest.raises(ValueError, match=r"fixed: vertex index [01] appears \d+ times .*looks like a mask: pass it "

@@ -359,6 +359,19 @@ TEST_CASE("shape change: lengths, area and volume around the free region, and wh
   CHECK(*doubled.volume_change == Approx(7));
   CHECK_THAT(shape_change_warning(doubled), Contains("area changed x4") && Contains("volume changed by +700 %"));
   CHECK(shape_change_warning(doubled, /*edit_scales=*/true).empty());  // a scaling edit asks for it
+  // Ten times the size, asked by the handles: every edge 10x is what the edit asks (it was warned as
+  // "stretched or shrank 10 times"); a mirror asks for the volume's sign to turn.
+  const Mat4 ten = Mat4(Eigen::Vector4d(10, 10, 10, 1).asDiagonal()),
+             mirror = Mat4(Eigen::Vector4d(-1, 1, 1, 1).asDiagonal());
+  CHECK(edit_stretch({ten}) == Approx(10));
+  CHECK(edit_stretch({Mat4(Eigen::Vector4d(1, 1, 0.1, 1).asDiagonal())}) == Approx(10));
+  CHECK(edit_stretch({Mat4::Identity()}) == 1);
+  CHECK(shape_change_warning(shape_change(s.P, 10.0 * s.P, s.F, region), edit_scales({ten}),
+                             edit_stretch({ten}))
+            .empty());
+  CHECK_THAT(shape_change_warning(shape_change(s.P, 10.0 * s.P, s.F, region)),
+             Contains("stretched or shrank 10 times"));
+  CHECK(edit_scales({mirror}));
   // Which edits scale: a rotation written with 6 digits (the survey cylinder's .def) does not.
   Mat4 written = Mat4::Identity();
   written.topLeftCorner<3, 3>() << -0.5, 0, -0.866025, 0, 1, 0, 0.866025, 0, -0.5;

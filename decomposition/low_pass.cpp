@@ -187,7 +187,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
           area_ratio < kMinAreaRatio) {  // from here on the base loses the shape, not just the details
         char why[240];
         if (check.folding_vertices > allowed_folds)
-          std::snprintf(why, sizeof why, "the details of %ld vertices fold over it", check.folding_vertices);
+          std::snprintf(why, sizeof why, "the details of %d vertices fold over it", check.folding_vertices);
         else if (area_ratio < kMinAreaRatio)
           std::snprintf(why, sizeof why, "its area is %.3g of the mesh's", area_ratio);
         else

@@ -722,20 +722,27 @@ constexpr int kOptimalCorners = 256, kShapedFans = 1024;
 PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, int n,
                            std::vector<std::array<int, 3>>& out,
                            const std::vector<std::array<int, 2>>* shared = nullptr) {
+  // The corners relative to the first, over the polygon's extent: the Newell normal's products neither
+  // underflow (a concave pentagon 1e-100 across had no normal and was fanned, folded) nor overflow (1e80
+  // across: refused as crossing itself), nor cancel far from the origin.
+  double extent = 0;
+  for (int k = 1; k < n; ++k)
+    extent = std::max(extent, (points[corner[k]] - points[corner[0]]).cwiseAbs().maxCoeff());
+  std::vector<Vec3> x(n, Vec3::Zero());
+  if (extent > 0)
+    for (int k = 1; k < n; ++k) x[k] = (points[corner[k]] - points[corner[0]]) / extent;
   Vec3 normal = Vec3::Zero();  // Newell: twice the vector area, whatever the first corner
-  for (int k = 0; k < n; ++k) normal += points[corner[k]].cross(points[corner[(k + 1) % n]]);
+  for (int k = 0; k < n; ++k) normal += x[k].cross(x[(k + 1) % n]);
   if (!(normal.squaredNorm() > 0)) {  // no area: all corners on a line, or lobes that cancel (a bow tie)
-    const Vec3& p0 = points[corner[0]];
     for (int k = 1; k + 1 < n; ++k)
-      if ((points[corner[k]] - p0).cross(points[corner[k + 1]] - p0).squaredNorm() > 0)
-        return PolygonSplit::CrossesItself;
+      if (x[k].cross(x[k + 1]).squaredNorm() > 0) return PolygonSplit::CrossesItself;
     for (int k = 1; k + 1 < n; ++k) out.push_back({corner[0], corner[k], corner[k + 1]});
     return PolygonSplit::Fan;
   }
   // The plane (u, v) with u × v along the normal, so the polygon runs counter-clockwise.
   const Vec3 u = normal.unitOrthogonal(), v = normal.normalized().cross(u);
   std::vector<Eigen::Vector2d> q(n);
-  for (int k = 0; k < n; ++k) q[k] = {points[corner[k]].dot(u), points[corner[k]].dot(v)};
+  for (int k = 0; k < n; ++k) q[k] = {x[k].dot(u), x[k].dot(v)};
   const auto turn = [&](int a, int b, int c) {  // > 0: a, b, c counter-clockwise
     const Eigen::Vector2d e = q[b] - q[a], f = q[c] - q[a];
     return e.x() * f.y() - e.y() * f.x();
@@ -749,7 +756,7 @@ PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, i
   };
   const auto shape = [&](int a, int b, int c) {  // ≤ 0 where turned over or flat (or refused)
     if (shared && on_shared_chain(a, b, c)) return 0.0;
-    const Vec3 &pa = points[corner[a]], &pb = points[corner[b]], &pc = points[corner[c]];
+    const Vec3 &pa = x[a], &pb = x[b], &pc = x[c];
     const double longest =
         std::max({(pb - pa).squaredNorm(), (pc - pb).squaredNorm(), (pa - pc).squaredNorm()});
     const double t = turn(a, b, c);
@@ -771,12 +778,10 @@ PolygonSplit split_polygon(const std::vector<Vec3>& points, const int* corner, i
   // of 100 corners loaded in 4.5 s with it, 0.1 s without): every other split is as flat, and none is
   // needed to avoid a sliver.
   bool convex = true, flat = true;
-  double extent = 0;
-  for (int k = 0; k < n; ++k) extent = std::max(extent, (points[corner[k]] - points[corner[0]]).norm());
   const Vec3 axis = normal.normalized();
   for (int k = 0; k < n && (convex || flat); ++k) {
     convex = convex && turn((k + n - 1) % n, k, (k + 1) % n) > 0;
-    flat = flat && std::abs((points[corner[k]] - points[corner[0]]).dot(axis)) <= 1e-3 * extent;
+    flat = flat && std::abs(x[k].dot(axis)) <= 1e-3;  // of the extent, which is 1 here
   }
   if (convex && flat && first >= 1e-2) return fan(0);
   if (n <= kOptimalCorners) {

@@ -240,6 +240,28 @@ TEST_CASE("polygons with a corner of nearly 180 degrees split without slivers", 
     INFO("triangle " << f);
     CHECK((p1 - p0).cross(p2 - p0).z() / longest >= 0.1);  // no sliver
   }
+  // The concave pentagon at any size and far from the origin: 1e-100 across it had no normal and was fanned
+  // folded, 1e80 across it was refused as crossing itself.
+  for (const double size : {1e-100, 1e-60, 1.0, 1e60, 1e80})
+    for (const double offset : {0.0, 1e8 * size}) {
+      INFO("size " << size << ", offset " << offset);
+      std::ostringstream pentagon;
+      pentagon << std::setprecision(17);
+      for (const auto& [x, y] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {1.0, 1.0}, {0.5, 0.2}, {0.0, 1.0}})
+        pentagon << "v " << offset + size * x << " " << offset + size * y << " " << offset << "\n";
+      std::ofstream(tmp.file("scaled.obj")) << pentagon.str() << "f 1 2 3 4 5\n";
+      const TriangleSoup scaled = load_soup(tmp.file("scaled.obj"));
+      REQUIRE(scaled.F.rows() == 3);
+      double area = 0;
+      for (Eigen::Index f = 0; f < 3; ++f) {
+        const Vec3 p0 = scaled.P.row(scaled.F(f, 0)), p1 = scaled.P.row(scaled.F(f, 1)),
+                   p2 = scaled.P.row(scaled.F(f, 2));
+        const double z = ((p1 - p0) / size).cross((p2 - p0) / size).z() / 2;
+        CHECK(z > 0);
+        area += z;
+      }
+      CHECK(area == Approx(0.6).epsilon(1e-6));  // the unit square less the notch (0.4)
+    }
   // A side of zero length: named as such (it was "a polygon that crosses itself").
   std::ofstream(tmp.file("coincident.off")) << "OFF\n5 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n1 0 0\n5 0 1 4 2 3\n";
   CHECK_THROWS_WITH(

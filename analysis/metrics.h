@@ -199,7 +199,8 @@ struct ShapeChange {
 
 //! rest, deformed: #V by 3; F: #F by 3 (may be empty: nothing measured); region: #V codes. Edges shorter
 //! than 1e-6 of the rest's bounding-box diagonal are skipped: their length changes by rounding-sized
-//! amounts that read as large factors (a 1e-7 column widened to 5e-7 read "stretched 5.1 times"). O(#F). \throw InvalidInput for differing row counts or an index out of range.
+//! amounts that read as large factors (a 1e-7 column widened to 5e-7 read "stretched 5.1 times"). O(#F).
+//! \throw InvalidInput for differing row counts or an index out of range.
 ShapeChange shape_change(const Positions& rest, const Positions& deformed, const Faces& F, const Region& region);
 
 //! Empty, or why the result lost the shape: an edge stretched or shrunk by more than 5× the edit's own

@@ -31,13 +31,13 @@ int count_self_intersections(const Positions& P, const Faces& F,
 //! slide). The constructor counts the rest's pairs once; each count() is one CGAL run.
 class AddedSelfIntersections {
  public:
-  //! rest: #V×3, F: #F×3. 	hrow InvalidInput as count_self_intersections, and for a vertex on more than
+  //! rest: #V×3, F: #F×3. \throw InvalidInput as count_self_intersections, and for a vertex on more than
   //! 10000 faces: CGAL tests the faces around a vertex pairwise (a flat fan of 16000 faces took 45 s per
   //! count, one of 47000 an hour).
   AddedSelfIntersections(const Positions& rest, const Faces& F);
   int rest_pairs() const { return rest_pairs_; }
   //! The pairs of result (#V×3, on F) the edit added; their faces (rows of F, a face once per pair) into
-  //! *faces if given. 	hrow InvalidInput as count_self_intersections.
+  //! *faces if given. \throw InvalidInput as count_self_intersections.
   int count(const Positions& result, std::vector<int>* faces = nullptr) const;
 
  private:

@@ -107,8 +107,9 @@ class Deformer {
   void deform_to(const Positions& targets, Positions& out);
 
   //! Methods with traits().initial_guess: the next frame starts from X (#V by 3) instead of the last
-  //! frame's result (ARAP only where X's energy is below its cold start's: FrameReport::start says). \throw UsageError for other methods, before prepare, or for a wrong shape;
-  //! InvalidInput if X is not finite.
+  //! frame's result (ARAP only where X's energy is below its cold start's: FrameReport::start says).
+  //! \throw UsageError for other methods, before prepare, or for a wrong shape; InvalidInput if X is not
+  //! finite.
   void set_initial_guess(const Positions& X);
   //! Back to the rest pose: the next frame of an iterative method starts from rest, a space method's map
   //! is the identity again, and the frame report is cleared. Factorisations are kept.

@@ -1,6 +1,7 @@
 #include "msdeform/detail/deformation_transfer.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -44,10 +45,15 @@ struct Box {
     parallel_for_chunks(
         n,
         [&](long begin, long end) {
+          // Column by column, each read from the cache after the first pass (a chunk's column fits it).
           Box chunk;
-          for (long i = begin; i < end; ++i) chunk.add(Vec3((P.row(i) + shift).transpose()));
-          for (int c = 0; c < 3; ++c)
-            if (!all_finite(P.data() + c * n + begin, end - begin)) finite = false;
+          for (int c = 0; c < 3; ++c) {
+            const double* x = P.data() + c * n + begin;
+            if (!all_finite(x, end - begin)) finite = false;
+            const Eigen::Map<const Eigen::ArrayXd> column(x, end - begin);
+            chunk.lo[c] = column.minCoeff() + shift[c];
+            chunk.hi[c] = column.maxCoeff() + shift[c];
+          }
           std::lock_guard<std::mutex> lock(mutex);
           add(chunk.lo);
           add(chunk.hi);
@@ -76,14 +82,19 @@ std::string format_point(const Vec3& p) {
   return text;
 }
 
-// Sumner & Popović's frame [e1, e2, n / √‖n‖] of a triangle (columns); a zero normal gives a zero column.
-Mat3 triangle_frame(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 e1 = b - a, e2 = c - a, n = e1.cross(e2);
+// The third column n / √‖n‖ of a triangle's frame (n = (b − a) × (c − a)); zero for a zero normal.
+inline Vec3 scaled_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 n = (b - a).cross(c - a);
   const double len = n.norm();
+  return len > 0 ? Vec3(n / std::sqrt(len)) : Vec3::Zero();
+}
+
+// Sumner & Popović's frame [e1, e2, n / √‖n‖] of a triangle (columns).
+Mat3 triangle_frame(const Vec3& a, const Vec3& b, const Vec3& c) {
   Mat3 V;
-  V.col(0) = e1;
-  V.col(1) = e2;
-  V.col(2) = len > 0 ? Vec3(n / std::sqrt(len)) : Vec3::Zero();
+  V.col(0) = b - a;
+  V.col(1) = c - a;
+  V.col(2) = scaled_normal(a, b, c);
   return V;
 }
 
@@ -123,7 +134,6 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
 
   encoded_ = false;  // stays so if anything below throws
   Report report;
-  base_faces_ = Fb;
   num_base_vertices_ = static_cast<int>(nb);
 
   // Frames of the base triangles. A triangle that cotan_laplacian() leaves out (degenerate) or clamps (a
@@ -251,37 +261,62 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   std::vector<char> is_known(ns, 0);
   for (int v : known) is_known[v] = 1;
 
-  // The corners of the unknown vertices, by row of the reduced system (ConstrainedQuadratic orders the
-  // unknowns ascending), for a race-free right-hand side row by row. G_t q = V' (V⁻¹ q): each corner keeps
-  // u = V⁻¹ q of the base face its triangle takes, so a frame forms only the frames V' (q itself where the
-  // triangle has no base face: G = I). The base faces the corners read get frame slots in the order the
-  // rows first read them, so the right-hand side reads the frames nearly in the order a frame writes them.
+  // The right-hand side's weights, by row of the reduced system (ConstrainedQuadratic orders the unknowns
+  // ascending), for a race-free right-hand side row by row. G_t q = V' (V⁻¹ q): each corner's u = V⁻¹ q of
+  // the base face its triangle takes, spread over that face's corners and its slot (q itself where the
+  // triangle has no base face: G = I). The base faces the rows read get frame slots in the order the rows
+  // first read them, so the right-hand side reads the normals nearly in the order a frame writes them.
   {
     const VertexFaces corners = vertex_faces(Fs, static_cast<int>(ns));
-    long num_corners = 0;
-    for (long v = 0; v < ns; ++v)
-      if (!is_known[v]) num_corners += corners.offsets[v + 1] - corners.offsets[v];
-    corner_u_.resize(num_corners, 3);
-    corner_source_.resize(num_corners);
-    corner_offsets_.assign(1, 0);
-    slot_faces_.clear();
+    for (auto* v : {&base_offsets_, &normal_offsets_}) v->assign(1, 0);
+    for (auto* v : {&base_vertex_, &normal_slot_}) v->clear();
+    for (auto* v : {&base_weight_, &normal_weight_}) v->clear();
+    identity_rows_.clear();
+    slot_corners_.clear();
     std::vector<int> slot(nfb, -1);
-    int c = 0;
+    std::vector<std::pair<int, double>> base_terms, normal_terms;
+    // Appends the terms of one row to a CSR, merged by index (sorted: the first is the row's reference).
+    const auto append = [](std::vector<std::pair<int, double>>& terms, std::vector<int>& offsets,
+                           std::vector<int>& index, std::vector<double>& weight) {
+      std::sort(terms.begin(), terms.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      for (size_t i = 0; i < terms.size(); ++i) {
+        if (i > 0 && terms[i].first == terms[i - 1].first) {
+          weight.back() += terms[i].second;
+          continue;
+        }
+        index.push_back(terms[i].first);
+        weight.push_back(terms[i].second);
+      }
+      offsets.push_back(static_cast<int>(index.size()));
+    };
+    int r = 0;
     for (long v = 0; v < ns; ++v) {
       if (is_known[v]) continue;
-      for (int j = corners.offsets[v]; j < corners.offsets[v + 1]; ++j, ++c) {
+      base_terms.clear();
+      normal_terms.clear();
+      Vec3 identity = Vec3::Zero();
+      for (int j = corners.offsets[v]; j < corners.offsets[v + 1]; ++j) {
         const int t = corners.faces[j], s = source_face_[t];
         const int k = Fs(t, 0) == v ? 0 : Fs(t, 1) == v ? 1 : 2;
         const Vec3 q = face_q.block<1, 3>(t, 3 * k).transpose();
-        const Vec3 u = s >= 0 ? Vec3(Eigen::Map<const RowMat3>(frame_inverse.row(s).data()) * q) : q;
-        corner_u_.row(c) = u.transpose();
-        if (s >= 0 && slot[s] < 0) {
-          slot[s] = static_cast<int>(slot_faces_.size());
-          slot_faces_.push_back(s);
+        if (s < 0) {
+          identity += q;
+          continue;
         }
-        corner_source_[c] = s >= 0 ? slot[s] : -1;
+        const Vec3 u = Eigen::Map<const RowMat3>(frame_inverse.row(s).data()) * q;
+        if (slot[s] < 0) {
+          slot[s] = static_cast<int>(slot_corners_.size());
+          slot_corners_.push_back({Fb(s, 0), Fb(s, 1), Fb(s, 2)});
+        }
+        base_terms.emplace_back(Fb(s, 0), -(u[0] + u[1]));
+        base_terms.emplace_back(Fb(s, 1), u[0]);
+        base_terms.emplace_back(Fb(s, 2), u[1]);
+        normal_terms.emplace_back(slot[s], u[2]);
       }
-      corner_offsets_.push_back(c);
+      append(base_terms, base_offsets_, base_vertex_, base_weight_);
+      append(normal_terms, normal_offsets_, normal_slot_, normal_weight_);
+      if (identity != Vec3::Zero()) identity_rows_.emplace_back(r, identity);
+      ++r;
     }
   }
   frame_inverse = FaceMatrices();
@@ -316,7 +351,7 @@ void DeformationTransfer::encode(const Positions& S, const Faces& Fs, const Posi
   }
   normal_.encode(S, Fs, B, Fb);
 
-  frame_.setZero(static_cast<long>(slot_faces_.size()), 9);
+  slot_normal_.setZero(static_cast<long>(slot_corners_.size()), 3);
   ordered_.setZero(static_cast<long>(solve_row_.size()), 4);
   known_values_.resize(known.size(), 3);
   Box rest;
@@ -341,15 +376,13 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
   if (!box.add(B_deformed))
     check_finite(B_deformed, where, "the deformed base");  // throws, naming the vertex
 
-  // The frames V' of the base faces the unknown vertices' triangles read (G = V' V⁻¹, with V⁻¹ already
-  // folded into the corners' u).
+  // The scaled normals ñ' of the base faces the unknown vertices' triangles read: the part of their frames
+  // V' that is not linear in B' (G = V' V⁻¹, with V⁻¹ already folded into the right-hand side's weights).
   const phong::Columns Bc(B_deformed);
-  parallel_for_chunks(static_cast<long>(slot_faces_.size()), [&](long begin, long end) {
+  parallel_for_chunks(static_cast<long>(slot_corners_.size()), [&](long begin, long end) {
     for (long k = begin; k < end; ++k) {
-      const int f = slot_faces_[k];
-      const Mat3 V =
-          triangle_frame(Bc.row(base_faces_(f, 0)), Bc.row(base_faces_(f, 1)), Bc.row(base_faces_(f, 2)));
-      Eigen::Map<RowMat3>(frame_.row(k).data()) = V;
+      const std::array<int, 3>& f = slot_corners_[k];
+      slot_normal_.row(k) = scaled_normal(Bc.row(f[0]), Bc.row(f[1]), Bc.row(f[2]));
     }
   });
 
@@ -369,25 +402,28 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
   known_values_.rowwise() -= centre;
 
   // Reduced right-hand side Q_uu x_u = f_u − Q_uk x_k, f_i = Σ G_t (Q_t S)_k = Σ V'_t u_k over the corners
-  // at vertex i, each row written where the solver takes it.
+  // at vertex i (expanded over B' and ñ': base_weight_), each row written where the solver takes it.
   const std::vector<int>& unknown = system_.unknown();
   const long nu = static_cast<long>(unknown.size());
   const double *kx = known_values_.data(), *ky = kx + known_values_.rows(), *kz = ky + known_values_.rows();
+  const double* normals = slot_normal_.data();
   parallel_for_chunks(nu, [&](long begin, long end) {
     for (long r = begin; r < end; ++r) {
-      // Scalar sums in registers: Eigen's 3×3 product kept the sum on the stack and stalled on reloading it.
-      double x = 0, y = 0, z = 0;
-      for (int c = corner_offsets_[r]; c < corner_offsets_[r + 1]; ++c) {
-        const int s = corner_source_[c];
-        const double* u = corner_u_.row(c).data();
-        if (s >= 0) {
-          const double* V = frame_.row(s).data();  // row-major V'
-          x += V[0] * u[0] + V[1] * u[1] + V[2] * u[2];
-          y += V[3] * u[0] + V[4] * u[1] + V[5] * u[2];
-          z += V[6] * u[0] + V[7] * u[1] + V[8] * u[2];
-        } else {
-          x += u[0], y += u[1], z += u[2];
+      double x = 0, y = 0, z = 0;  // scalar sums in registers
+      const int b0 = base_offsets_[r], b1 = base_offsets_[r + 1];
+      if (b0 < b1) {
+        const int ref = base_vertex_[b0];
+        const double rx = Bc.x[ref], ry = Bc.y[ref], rz = Bc.z[ref];
+        for (int c = b0 + 1; c < b1; ++c) {
+          const int j = base_vertex_[c];
+          const double w = base_weight_[c];
+          x += w * (Bc.x[j] - rx), y += w * (Bc.y[j] - ry), z += w * (Bc.z[j] - rz);
         }
+      }
+      for (int c = normal_offsets_[r]; c < normal_offsets_[r + 1]; ++c) {
+        const double* n = normals + 3 * normal_slot_[c];
+        const double w = normal_weight_[c];
+        x += w * n[0], y += w * n[1], z += w * n[2];
       }
       for (int c = coupling_offsets_[r]; c < coupling_offsets_[r + 1]; ++c) {
         const int k = coupling_known_[c];
@@ -398,6 +434,7 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
       row[0] = x, row[1] = y, row[2] = z;
     }
   });
+  for (const auto& [r, q] : identity_rows_) ordered_.row(solve_row_[r]).head<3>() += q.transpose();
   if (nu > 0) system_.solver().solve_ordered(ordered_.data(), 3);
   // S' of the unknown vertices, each row tested against check_result()'s bound as it is written (the
   // Dirichlet rows are finite, and in the box by construction): only when one fails (beyond the bound or

@@ -4,7 +4,9 @@
 //! deformation B → B' is measured per base triangle as a 3×3 deformation gradient, applied to the
 //! corresponding triangles of S, and S' is the surface whose gradients best match (one Poisson solve).
 
+#include <array>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "msdeform/core/solver.h"
@@ -119,28 +121,33 @@ class DeformationTransfer : public DetailEncoding {
   bool encoded_ = false;
   int num_base_vertices_ = 0;
   long num_vertices_ = 0;  // of S
-  Faces base_faces_;
   // Per base face: the face whose frame it uses (itself unless degenerate or a needle).
   Eigen::VectorXi frame_face_;
   Eigen::VectorXi source_face_;      // per S face, already resolved through frame_face_ (−1: identity)
-  // Frame slots: slot_faces_[k] is the base face whose V' a frame writes to frame_ row k (the faces the
-  // unknown vertices' triangles read, in the order the right-hand side first reads them).
-  std::vector<int> slot_faces_;
-  // CSR corners of S by row r of the reduced system (unknown vertex r): corner_source_[c] = the frame slot
-  // of the source face s of the corner's triangle t (−1: none), and corner_u_ row c = V_s⁻¹ q_{t,k} (q_{t,k}
-  // itself where s = −1).
-  std::vector<int> corner_offsets_, corner_source_;
+  // Frame slots: slot_corners_[k] are the corners of the base face whose scaled normal ñ' = n'/√‖n'‖ (the
+  // third column of its frame V') a frame writes to slot_normal_ row k (the faces the unknown vertices'
+  // triangles read, in the order the right-hand side first reads them).
+  std::vector<std::array<int, 3>> slot_corners_;
+  // The right-hand side of row r of the reduced system (unknown vertex r), f_r = Σ_c V'_s u_c over the
+  // corners c of S at that vertex (u_c = V_s⁻¹ q_{t,k} of the source face s of the corner's triangle t),
+  // expanded: V' u = u0 (b' − a') + u1 (c' − a') + u2 ñ' is linear in B' but for ñ', so
+  //   f_r = Σ_j base_weight (b'_j − b'_ref) + Σ_k normal_weight ñ'_k + q_r,
+  // CSR by row with the weights merged per base vertex j and per slot k. The weights of a row sum to zero,
+  // so subtracting its first base vertex b'_ref changes nothing but the rounding: each term is an edge
+  // vector, as in V' u. q_r sums the corners whose triangle has no base frame (G = I): rare, kept apart.
+  std::vector<int> base_offsets_, base_vertex_, normal_offsets_, normal_slot_;
+  std::vector<double> base_weight_, normal_weight_;
+  std::vector<std::pair<int, Vec3>> identity_rows_;  // (r, q_r) where q_r ≠ 0
   // Row r of the reduced system is row solve_row_[r] of its solver's order (SparseSPDSolver::ordering()).
   std::vector<int> solve_row_;
   // Q(unknown, known) by row r (CSR): coupling_known_ indexes system_.known().
   std::vector<int> coupling_offsets_, coupling_known_;
   std::vector<double> coupling_weight_;
-  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> corner_u_;
   ConstrainedQuadratic system_;
   double rest_extent_ = 0;  // diagonal of the bounding box of S ∪ B (the result check's detail allowance)
   Report report_;
   // Per-frame buffers.
-  Eigen::Matrix<double, Eigen::Dynamic, 9, Eigen::RowMajor> frame_;  // V' per frame slot (row-major 3×3)
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> slot_normal_;  // ñ' per frame slot
   Eigen::MatrixXd known_values_;  // rows of system_.known()
   // The right-hand sides, then the solution, of the reduced system in its solver's order (4 per row).
   Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> ordered_;

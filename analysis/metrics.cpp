@@ -337,38 +337,50 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
   return c;
 }
 
-bool edit_scales(const std::vector<Mat4>& transforms) {
-  return std::any_of(transforms.begin(), transforms.end(), [](const Mat4& T) {
-    const Mat3 A = T.topLeftCorner<3, 3>();
-    return !((A.transpose() * A - Mat3::Identity()).cwiseAbs().maxCoeff() <= 1e-4) || A.determinant() < 0;
-  });
-}
-
-double edit_stretch(const std::vector<Mat4>& transforms) {
-  double most = 1;
+EditScaling edit_scaling(const std::vector<Mat4>& transforms) {
+  EditScaling e;
   for (const Mat4& T : transforms) {
-    const Vec3 sigma = Eigen::JacobiSVD<Mat3>(Mat3(T.topLeftCorner<3, 3>())).singularValues();
-    most = std::max({most, sigma(0), sigma(2) > 0 ? 1 / sigma(2) : INFINITY});
+    const Mat3 A = T.topLeftCorner<3, 3>();
+    const Vec3 sigma = Eigen::JacobiSVD<Mat3>(A).singularValues();  // descending
+    e.stretch = std::max({e.stretch, sigma(0), sigma(2) > 0 ? 1 / sigma(2) : INFINITY});
+    e.area_low = std::min(e.area_low, sigma(1) * sigma(2));
+    e.area_high = std::max(e.area_high, sigma(0) * sigma(1));
+    const double det = A.determinant();
+    e.volume_low = std::min(e.volume_low, std::abs(det));
+    e.volume_high = std::max(e.volume_high, std::abs(det));
+    e.mirrors = e.mirrors || det < 0;
   }
-  return most;
+  return e;
 }
 
-std::string shape_change_warning(const ShapeChange& c, bool edit_scales, double edit_stretch) {
+double EditScaling::volume_excess(double ratio) const {
+  if (ratio > volume_high) return ratio / volume_high - 1;
+  if (ratio < volume_low) return 1 - ratio / volume_low;
+  return 0;
+}
+
+std::string shape_change_warning(const ShapeChange& c, const EditScaling& asked) {
   std::string why;
   auto add = [&](const std::string& text) { why += (why.empty() ? "" : ", ") + text; };
+  // " (the handles ask for xLOW to xHIGH)" where they scale visibly.
+  auto range = [](double low, double high) {
+    char text[96];
+    std::snprintf(text, sizeof text, " (the handles ask for x%.4g to x%.4g)", low, high);
+    return std::string(text) == " (the handles ask for x1 to x1)" ? std::string() : std::string(text);
+  };
   char text[160];
-  if (c.largest_factor > 5 * edit_stretch) {
+  if (c.largest_factor > 5 * asked.stretch) {
     std::snprintf(text, sizeof text, "an edge at vertex %d stretched or shrank %.3g times", c.largest_vertex,
                   c.largest_factor);
     add(text);
   }
-  if (!edit_scales && (c.area_ratio > 1.5 || c.area_ratio < 2.0 / 3)) {
+  if (c.area_ratio > 1.5 * asked.area_high || c.area_ratio < 2.0 / 3 * asked.area_low) {
     std::snprintf(text, sizeof text, "the free region's area changed x%.3g", c.area_ratio);
-    add(text);
+    add(text + range(asked.area_low, asked.area_high));
   }
-  if (!edit_scales && c.volume_change && std::abs(*c.volume_change) > 0.3) {
+  if (c.volume_change && !asked.mirrors && asked.volume_excess(1 + *c.volume_change) > 0.3) {
     std::snprintf(text, sizeof text, "the volume changed by %+.3g %%", 100 * *c.volume_change);
-    add(text);
+    add(text + range(asked.volume_low, asked.volume_high));
   }
   if (why.empty()) return why;
   return "the result does not keep the shape's proportions: " + why +

@@ -203,26 +203,30 @@ struct ShapeChange {
 //! \throw InvalidInput for differing row counts or an index out of range.
 ShapeChange shape_change(const Positions& rest, const Positions& deformed, const Faces& F, const Region& region);
 
-//! Empty, or why the result lost the shape: an edge stretched or shrunk by more than 5× the edit's own
-//! stretch (edit_stretch: 1 for rigid handles; tears and collapses; on the built-in benchmark the shell,
-//! Laplacian editing, lattice and cages do this under bends and twists, ARAP, gradient editing and
-//! deformation transfer stay below 4.5×), the free region's area changed by more than 1.5× or below 2/3, or
-//! a closed mesh's volume changed by more than 30 %. An edit that scales or mirrors a handle (edit_scales)
-//! asks for area and volume to change: then only the edges count.
-std::string shape_change_warning(const ShapeChange& change, bool edit_scales = false,
-                                 double edit_stretch = 1);
+//! What the handle transforms themselves ask of the shape. A transform's linear part A, with singular
+//! values σ1 ≥ σ2 ≥ σ3, stretches an edge by σ3 to σ1, scales a surface's area by σ2σ3 to σ1σ2 and a volume
+//! by |det A|; the free region blends the handles with the fixed part (left as it is), so each range
+//! includes 1. Rigid handles ask for nothing (all 1); a rotation written with 6 digits (the survey's .def
+//! files) asks for factors within 1e-6 of 1.
+struct EditScaling {
+  double stretch = 1;                      //!< the largest of 1, every σ1 and every 1/σ3 (inf: singular)
+  double area_low = 1, area_high = 1;      //!< area factors asked: min(1, σ2σ3) to max(1, σ1σ2)
+  double volume_low = 1, volume_high = 1;  //!< volume factors asked: min(1, |det A|) to max(1, |det A|)
+  bool mirrors = false;                    //!< some det A < 0: a mirrored part turns its volume's sign
+  //! How far a volume ratio V'/V lies outside [volume_low, volume_high], relative to the end it passed:
+  //! ratio / volume_high − 1 above, 1 − ratio / volume_low below, 0 within (without scaling: |V'/V − 1|).
+  double volume_excess(double ratio) const;
+};
+EditScaling edit_scaling(const std::vector<Mat4>& transforms);
 
-//! True when a handle transform (4×4 affine, rows of `transforms`) scales, shears or mirrors: its linear
-//! part A has AᵀA differing from I by more than 1e-4 in some entry, or a negative determinant. Such an edit
-//! asks for area and volume to change (a mirror turns the volume's sign). A rotation written with 6 digits
-//! (the survey's .def files) has AᵀA = I to about 1e-6: not a scaling (a tolerance of 1e-9 took the survey
-//! cylinder's bend for one and silenced its −51 % volume).
-bool edit_scales(const std::vector<Mat4>& transforms);
-
-//! How much the handle transforms themselves stretch or shrink: the largest of 1, their singular values and
-//! the inverses of their smallest (inf for a singular one). A uniform scale by 10 stretches every edge 10
-//! times, as asked: shape_change_warning then warns only beyond 50.
-double edit_stretch(const std::vector<Mat4>& transforms);
+//! Empty, or why the result lost the shape, against what the edit asks (`asked`, edit_scaling()): an edge
+//! stretched or shrunk by more than 5× the edit's own stretch (tears and collapses; on the built-in
+//! benchmark the shell, Laplacian editing, lattice and cages do this under bends and twists, ARAP, gradient
+//! editing and deformation transfer stay below 4.5×), the free region's area changed by more than 1.5×
+//! area_high or below 2/3 of area_low, or a closed mesh's volume by more than 30 % beyond the range asked
+//! (volume_excess; not judged when a handle mirrors). A handle scaled by 1.001 still leaves a +75 % volume
+//! change to be warned about (it silenced the area and volume checks altogether).
+std::string shape_change_warning(const ShapeChange& change, const EditScaling& asked = {});
 
 // ---------------------------------------------------------------------------------------------------
 // All metrics of one edit

@@ -447,10 +447,13 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
   // at vertex i (expanded over B' and ñ': base_weight_), each row written where the solver takes it.
   const std::vector<int>& unknown = system_.unknown();
   const long nu = static_cast<long>(unknown.size());
+  // Rows of ordered_ are read and written in the solver's order, scattered: fetched this many rows ahead.
+  constexpr long kAhead = 16;
   const double *kx = known_values_.data(), *ky = kx + known_values_.rows(), *kz = ky + known_values_.rows();
   const double* normals = slot_normal_.data();
   parallel_for_chunks(nu, [&](long begin, long end) {
     for (long r = begin; r < end; ++r) {
+      if (r + kAhead < end) __builtin_prefetch(ordered_.row(solve_row_[r + kAhead]).data(), 1);
       double x = 0, y = 0, z = 0;  // scalar sums in registers
       const int b0 = base_offsets_[r], b1 = base_offsets_[r + 1];
       if (b0 < b1) {
@@ -487,6 +490,7 @@ void DeformationTransfer::reconstruct(const Positions& B_deformed, Positions& ou
   parallel_for_chunks(nu, [&](long begin, long end) {
     bool chunk_near = true;
     for (long r = begin; r < end; ++r) {
+      if (r + kAhead < end) __builtin_prefetch(ordered_.row(solve_row_[r + kAhead]).data());
       const double* row = ordered_.row(solve_row_[r]).data();
       const Vec3 p(row[0] + centre[0], row[1] + centre[1], row[2] + centre[2]);
       out.row(unknown[r]) = p;

@@ -92,7 +92,7 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
     r.scene = edit.name;
     r.method = method;
     r.vertices = static_cast<int>(rest.rows());
-    r.edit_scales = edit_scales(edit.transforms);
+    r.scaling = edit_scaling(edit.transforms);
     try {
       MethodSettings settings = options.settings;
       if (settings.decomposition.kind == DecompositionKind::Subdivision && !settings.decomposition.control)

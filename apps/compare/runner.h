@@ -41,7 +41,7 @@ struct MethodResult {
   //! of an open mesh, or self-intersections switched off in the options, need no reason).
   std::string not_measured;
   std::optional<double> volume_change;  //!< relative, for closed meshes
-  bool edit_scales = false;  //!< a handle transform scales or shears (edit_scales()): volume may change
+  EditScaling scaling;  //!< what the handle transforms ask of area and volume (edit_scaling())
   //! Vertex-to-vertex distance to the reference method's result on the same edit, relative to its
   //! bounding-box diagonal (ComparisonOptions::reference; empty when there is none).
   std::optional<ReferenceDistance> reference;

@@ -120,10 +120,10 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         else if (d > t.fair_distortion) fair.push_back(text);
         else good.push_back("details kept (" + fmt("%.2g", 100 * d) + " %)");
       }
-      // An edit that scales a handle asks for the volume to change; any other keeps it, up to the shape's
-      // give (ARAP loses 13 % on the survey cylinder's 120° bend).
-      if (r.volume_change && !r.edit_scales) {
-        const double v = std::abs(*r.volume_change);
+      // The volume changes as much as the handles' scales ask (EditScaling), up to the shape's give (ARAP
+      // loses 13 % on the survey cylinder's 120° bend); a mirrored handle turns its sign (not judged).
+      if (r.volume_change && !r.scaling.mirrors) {
+        const double v = r.scaling.volume_excess(1 + *r.volume_change);
         const std::string text = "volume changed by " + fmt("%+.2g", 100 * *r.volume_change) + " %";
         if (v > t.poor_volume)
           poor.push_back(text);

@@ -22,9 +22,9 @@ struct VerdictThresholds {
   //! motion reads 1e-31 to 1e-22 from rounding): ratios are taken against at least this.
   double rigid_floor = 1e-6;
   double fair_distortion = 0.10, poor_distortion = 0.25;  //!< of the largest detail height
-  //! |relative volume change| of a closed mesh under an edit whose handles do not scale (edit_scales()):
-  //! beyond these, fair and poor. On the survey cylinder's 120° bend ARAP loses 13 %, the shell 51 %;
-  //! `msdeform deform` warns beyond the poor one (shape_change_warning()).
+  //! Relative volume change of a closed mesh beyond what the handles ask (EditScaling::volume_excess();
+  //! without scaling, |V'/V − 1|): beyond these, fair and poor. On the survey cylinder's 120° bend ARAP loses
+  //! 13 %, the shell 51 %; `msdeform deform` warns beyond the poor one (shape_change_warning()).
   double fair_volume = 0.15, poor_volume = 0.30;
 };
 

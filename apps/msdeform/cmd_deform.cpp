@@ -241,10 +241,9 @@ void add_deform_command(CLI::App& app) {
     for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
       for (const std::string& w : *list) std::fprintf(stderr, "warning: %s\n", in_file_numbering(w).c_str());
     if (!intersections.empty()) std::fprintf(stderr, "warning: %s\n", intersections.c_str());
-    const bool scales = edit_scales(c.transforms);  // asks for area and volume to change
     // Without a free vertex the prepare warning on torn edges says why they stretch.
     if (const std::string w =
-            has_free ? shape_change_warning(shape, scales, edit_stretch(c.transforms)) : std::string();
+            has_free ? shape_change_warning(shape, edit_scaling(c.transforms)) : std::string();
         !w.empty())
       std::fprintf(stderr, "warning: %s%s\n", w.c_str(),
                    deformer->name() == "arap" ? "; more ARAP iterations or a larger fixed region may help"

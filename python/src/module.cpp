@@ -683,8 +683,7 @@ of its area: a long tube free between its ends); msdeform.SolverError if a fairi
                                 std::to_string(region.num_handles()) + " handle(s) in labels");
         if (T.rows() == 0) throw py::value_error("F has no faces: there is no shape to measure");
         const msd::ShapeChange c = msd::shape_change(R, D, T, region);
-        const std::string warning =
-            msd::shape_change_warning(c, msd::edit_scales(asked), msd::edit_stretch(asked));
+        const std::string warning = msd::shape_change_warning(c, msd::edit_scaling(asked));
         py::dict d;
         d["edges"] = c.edges;
         d["stretched_share"] = c.stretched_share;
@@ -704,10 +703,11 @@ with edges (the edges measured: those with a free vertex, or between differently
 stretched_share (of those, the share whose length changed beyond 1.5x), largest_factor and largest_vertex
 (the largest change max(l'/l, l/l') and a vertex of that edge), area_ratio (of the triangles with a free
 vertex), volume_change (closed meshes, else None) and warning (the tool's warning text where an edge
-changed beyond 5x, the area beyond 1.5x or below 2/3, or the volume by over 30 %; None otherwise). rest,
-deformed (#V, 3); F (#F, 3), at least one face; labels (#V,) codes; transforms: the edit's, one per
-handle, so that the stretch, area and volume changes a scaling or mirror asks for are not warned about
-(None: no handle scales). Raises ValueError for mismatched shapes, no face, or a transform count other
+changed beyond 5x, the area beyond 1.5x or below 2/3, or the volume by over 30 %, each beyond what the
+handles' own scaling asks; None otherwise). rest, deformed (#V, 3); F (#F, 3), at least one face; labels
+(#V,) codes; transforms: the edit's, one per handle: a handle scaled by s asks for edges, areas and
+volumes to change by up to s, s^2 and s^3 (the volume is not judged when one mirrors; None: no handle
+scales). Raises ValueError for mismatched shapes, no face, or a transform count other
 than the handles'.)doc");
   m.def(
       "volume",

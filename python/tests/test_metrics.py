@@ -49,6 +49,9 @@ def test_shape_change_is_the_tools_check():
     assert results["arap"]["volume_change"] is None  # an open plane
     doubled = msdeform.shape_change(V, 2 * V, F, labels, [msdeform.scaling(2)])
     assert doubled["area_ratio"] == pytest.approx(4) and doubled["warning"] is None  # the edit asks for it
+    # A handle scaled by 1.001 asks for areas of x1 to x1.002, not x4 (any scale silenced the check).
+    slightly = msdeform.shape_change(V, 2 * V, F, labels, [msdeform.scaling(1.001)])
+    assert "area changed x4 (the handles ask for x1 to x1.002)" in slightly["warning"]
     ten = msdeform.shape_change(V, 10 * V, F, labels, [msdeform.scaling(10)])
     assert ten["largest_factor"] == pytest.approx(10) and ten["warning"] is None  # asked for (it warned)
     with pytest.raises(ValueError):

@@ -358,30 +358,58 @@ TEST_CASE("shape change: lengths, area and volume around the free region, and wh
   CHECK(doubled.area_ratio == Approx(4));
   CHECK(*doubled.volume_change == Approx(7));
   CHECK_THAT(shape_change_warning(doubled), Contains("area changed x4") && Contains("volume changed by +700 %"));
-  CHECK(shape_change_warning(doubled, /*edit_scales=*/true).empty());  // a scaling edit asks for it
+  const Mat4 two = Mat4(Eigen::Vector4d(2, 2, 2, 1).asDiagonal());
+  CHECK(shape_change_warning(doubled, edit_scaling({two})).empty());  // a scaling edit asks for it
   // Ten times the size, asked by the handles: every edge 10x is what the edit asks (it was warned as
   // "stretched or shrank 10 times"); a mirror asks for the volume's sign to turn.
   const Mat4 ten = Mat4(Eigen::Vector4d(10, 10, 10, 1).asDiagonal()),
              mirror = Mat4(Eigen::Vector4d(-1, 1, 1, 1).asDiagonal());
-  CHECK(edit_stretch({ten}) == Approx(10));
-  CHECK(edit_stretch({Mat4(Eigen::Vector4d(1, 1, 0.1, 1).asDiagonal())}) == Approx(10));
-  CHECK(edit_stretch({Mat4::Identity()}) == 1);
-  CHECK(shape_change_warning(shape_change(s.P, 10.0 * s.P, s.F, region), edit_scales({ten}),
-                             edit_stretch({ten}))
-            .empty());
+  CHECK(edit_scaling({ten}).stretch == Approx(10));
+  CHECK(edit_scaling({Mat4(Eigen::Vector4d(1, 1, 0.1, 1).asDiagonal())}).stretch == Approx(10));
+  CHECK(edit_scaling({Mat4::Identity()}).stretch == 1);
+  CHECK(shape_change_warning(shape_change(s.P, 10.0 * s.P, s.F, region), edit_scaling({ten})).empty());
   CHECK_THAT(shape_change_warning(shape_change(s.P, 10.0 * s.P, s.F, region)),
              Contains("stretched or shrank 10 times"));
-  CHECK(edit_scales({mirror}));
-  // Which edits scale: a rotation written with 6 digits (the survey cylinder's .def) does not.
+  CHECK(edit_scaling({mirror}).mirrors);
+  CHECK(shape_change_warning(shape_change(s.P, -1.0 * s.P, s.F, region), edit_scaling({mirror})).empty());
+  // What edits ask: nothing without handles or for rotations written with 6 digits (the survey cylinder's
+  // .def), whose −51 % volume is warned; a stretch of y by 1.001 asks for areas and volumes of x1 to x1.001.
   Mat4 written = Mat4::Identity();
   written.topLeftCorner<3, 3>() << -0.5, 0, -0.866025, 0, 1, 0, 0.866025, 0, -0.5;
-  CHECK_FALSE(edit_scales({Mat4::Identity(), written}));
-  CHECK_FALSE(edit_scales({}));
-  Mat4 scaled = Mat4::Identity(), sheared = Mat4::Identity();
+  for (const EditScaling& e : {edit_scaling({}), edit_scaling({Mat4::Identity(), written})}) {
+    CHECK(e.area_low == Approx(1).epsilon(1e-6));
+    CHECK(e.area_high == Approx(1).epsilon(1e-6));
+    CHECK(e.volume_excess(1) == 0);
+    CHECK_FALSE(e.mirrors);
+  }
+  ShapeChange lost;
+  lost.volume_change = -0.51;
+  CHECK_THAT(shape_change_warning(lost, edit_scaling({written})), Contains("volume changed by -51 %"));
+  Mat4 scaled = Mat4::Identity();
   scaled(1, 1) = 1.001;
-  sheared(0, 2) = 0.01;
-  CHECK(edit_scales({written, scaled}));
-  CHECK(edit_scales({sheared}));
+  const EditScaling slightly = edit_scaling({written, scaled});
+  CHECK(slightly.area_low == Approx(1));
+  CHECK(slightly.area_high == Approx(1.001));
+  CHECK(slightly.volume_high == Approx(1.001));
+  // The break test's elephant: a +75 % volume under a handle scaled by 1.001 went unwarned (any scaling
+  // handle silenced the area and volume checks); under a handle grown by 1.5 a volume lost by 73 % and an
+  // area x2.03 were not warned either. Within what the scale asks (volume x2 of x1 to x3.375) stays quiet.
+  ShapeChange ballooned;
+  ballooned.volume_change = 0.75;
+  CHECK_THAT(shape_change_warning(ballooned, slightly),
+             Contains("volume changed by +75 % (the handles ask for x1 to x1.001)"));
+  const Mat4 grown = Mat4(Eigen::Vector4d(1.5, 1.5, 1.5, 1).asDiagonal());
+  ShapeChange shrunk;
+  shrunk.volume_change = -0.73;
+  CHECK_THAT(shape_change_warning(shrunk, edit_scaling({grown})),
+             Contains("volume changed by -73 % (the handles ask for x1 to x3.375)"));
+  ShapeChange grown_within;
+  grown_within.volume_change = 1;
+  grown_within.area_ratio = 2.03;
+  CHECK(shape_change_warning(grown_within, edit_scaling({grown})).empty());  // area x1 to x2.25 asked
+  grown_within.area_ratio = 3.5;
+  CHECK_THAT(shape_change_warning(grown_within, edit_scaling({grown})),
+             Contains("area changed x3.5 (the handles ask for x1 to x2.25)"));
   // One vertex pulled far out: a torn edge, named by its vertex.
   Positions torn = s.P;
   torn.row(100) *= 20;

@@ -155,12 +155,20 @@ TEST_CASE("verdicts: a closed mesh that lost or gained volume under rigid handle
   CHECK(a[3].verdict == Verdict::Poor);
   CHECK_THAT(a[3].reason, Contains("volume changed by +3e+03 %"));
   CHECK(a[0].best);
-  // An edit that scales a handle asks for the volume to change.
-  for (MethodResult& r : results) r.edit_scales = true;
+  // An edit that scales handles asks for the volume to change, as much as they scale: handles shrunk 10
+  // times and grown 40 times ask for volumes of x0.001 to x64000; a handle grown by 1.001 leaves the
+  // changes judged as before (any scaling handle silenced the volume's verdict).
+  for (MethodResult& r : results)
+    r.scaling = edit_scaling({Mat4(Eigen::Vector4d(0.1, 0.1, 0.1, 1).asDiagonal()),
+                              Mat4(Eigen::Vector4d(40, 40, 40, 1).asDiagonal())});
   for (const Assessment& b : assess(results)) {
     CHECK(b.verdict == Verdict::Good);
     CHECK_THAT(b.reason, !Contains("volume"));
   }
+  for (MethodResult& r : results)
+    r.scaling = edit_scaling({Mat4(Eigen::Vector4d(1.001, 1, 1, 1).asDiagonal())});
+  CHECK(assess(results)[1].verdict == Verdict::Poor);
+  CHECK_THAT(assess(results)[1].reason, Contains("volume changed by -51 %"));
 }
 
 TEST_CASE("verdicts: rigidity errors at rounding level are rigid, not hundreds of times the best",

@@ -75,8 +75,24 @@ void Region::validate(int num_vertices, const Faces* F) const {
                          ") has no vertex, but handle " + std::to_string(num_handles_ - 1) +
                          " exists; handle codes must be consecutive");
   if (!F) return;
-  // Flood-fill the free vertices; each component must reach a constrained neighbour.
   const VertexAdjacency adjacency = vertex_adjacency(*F, num_vertices);
+  // A handle of vertices that no face uses moves nothing of the surface (the edit returned the surface at
+  // rest with handle error 0).
+  std::vector<int> example(num_handles_, -1);
+  std::vector<char> on_surface(num_handles_, 0);
+  for (int v = 0; v < num_vertices; ++v)
+    if (const int h = codes_[v] - kFirstHandle; h >= 0) {
+      if (example[h] < 0) example[h] = v;
+      on_surface[h] |= adjacency.begin(v) != adjacency.end(v);
+    }
+  for (int h = 0; h < num_handles_; ++h)
+    if (!on_surface[h])
+      throw TopologyError(
+          "region: handle " + std::to_string(h) + " (selection code " + std::to_string(h + kFirstHandle) +
+          ") holds only vertices that no face uses (e.g. vertex " + std::to_string(example[h]) +
+          "), so it cannot move the surface; select vertices of the surface, or use a space "
+          "method (lattice, cage, rbf), which deforms the space around it");
+  // Flood-fill the free vertices; each component must reach a constrained neighbour.
   std::vector<int> component(num_vertices, -1), stack;
   int num_components = 0;
   for (int seed = 0; seed < num_vertices; ++seed) {

@@ -129,3 +129,22 @@ TEST_CASE("region validation names an unconstrained free component", "[core][reg
   r.set_free({4});
   CHECK_NOTHROW(r.validate(6));  // without faces (a space method) components are not checked
 }
+
+TEST_CASE("region validation refuses a handle that no face reaches", "[core][region][bad-input]") {
+  // The break test's grid with one vertex that no face uses as the handle: exit 0, handle error 0, and
+  // the surface left at rest.
+  Positions P(4, 3);
+  P << 0, 0, 0, 1, 0, 0, 0, 1, 0, 100, 100, 100;
+  Faces F(1, 3);
+  F << 0, 1, 2;
+  Region r(4);
+  r.set_fixed({0});
+  r.set_handle({1}, 0);
+  r.set_handle({3}, 1);
+  CHECK_THROWS_AS(r.validate(4, &F), TopologyError);
+  CHECK_THROWS_WITH(r.validate(4, &F),
+                    Contains("handle 1") && Contains("vertex 3") && Contains("no face uses"));
+  CHECK_NOTHROW(r.validate(4));  // a space method deforms space around it
+  r.set_handle({2, 3}, 1);       // with a vertex on the surface it moves the surface
+  CHECK_NOTHROW(r.validate(4, &F));
+}

@@ -22,7 +22,11 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 // What to change when a multi-scale frame folded triangles over its base.
-std::string fold_advice(const Deformer& deformer) {
+std::string fold_advice(const Deformer& deformer, const std::vector<Mat4>& transforms) {
+  // The break test's mirrored handle: the advice to switch encodings led to an encoding that folded too.
+  if (edit_scaling(transforms).mirrors)
+    return "no method or encoding avoids these folds under a mirroring handle transform (negative "
+           "determinant)";
   const auto* ms = dynamic_cast<const MultiscaleDeformer*>(&deformer);
   if (!ms) return "the edit is too strong for this method";
   const DecompositionKind kind = ms->options().decomposition.kind;
@@ -248,7 +252,8 @@ void add_deform_command(CLI::App& app) {
       std::fprintf(stderr, "warning: %s%s\n", w.c_str(),
                    deformer->name() == "arap" ? "; more ARAP iterations or a larger fixed region may help"
                                               : "; arap keeps the proportions best");
-    if (report.folded_faces > 0) std::fprintf(stderr, "advice: %s\n", fold_advice(*deformer).c_str());
+    if (report.folded_faces > 0)
+      std::fprintf(stderr, "advice: %s\n", fold_advice(*deformer, c.transforms).c_str());
     std::printf("  wrote %s\n", output->c_str());
   });
 }

@@ -54,6 +54,7 @@ void add_decompose_command(CLI::App& app) {
     const DecompositionOptions options = decomposition->resolve(c);
     ProgressPrinter printer(*quiet);
     const Decomposition d = decompose(S, F, c.region, options, [&](const std::string& line) { printer(line); });
+    printer.flush();
     const DecompositionReport& report = d.report;
     const bool same_connectivity = d.base_faces.rows() == F.rows() && d.base_faces == F;
     NormalDisplacements details;

@@ -151,6 +151,8 @@ grep -q "1 vertices no face uses: height 0" out.txt || { cat out.txt; fail "deco
 # decompose reports the automatic scale's candidates as progress, and -q silences them as in deform.
 "$msdeform" decompose lift.off -o lift-base.ply >out.txt 2>err.txt || { cat err.txt; fail "decompose lift"; }
 grep -q "detail scale candidate 1 of at most" err.txt || { cat err.txt; fail "decompose printed no candidates"; }
+# The candidates after the first come within half a second: the last of them is printed all the same.
+[ "$(grep -c "detail scale candidate" err.txt)" -ge 2 ] || { cat err.txt; fail "decompose printed only its first candidate"; }
 "$msdeform" decompose lift.off -q -o lift-base.ply >out.txt 2>err.txt || { cat err.txt; fail "decompose -q"; }
 [ -s err.txt ] && { cat err.txt; fail "decompose -q printed progress"; }
 # A --mesh named like a built-in scene is kept apart (the two edits were merged into one row of verdicts

@@ -39,8 +39,9 @@ namespace msd {
 //! triangle Q_t x = G_t Q_t S with Q_t = −W_t. The right-hand side is linear in the G_t: row i is
 //! Σ G_t (Q_t S)_k over the corners k of the triangles t at vertex i, with (Q_t S)_k = Σ_m w_km (s_k − s_m)
 //! precomputed from edge vectors (independent of where S sits). encode() folds V⁻¹ in: G_t (Q_t S)_k =
-//! V'_t u_k with u_k = V_t⁻¹ (Q_t S)_k, so a frame forms only the frames V' and makes one pass over the
-//! corners. Triangles of S follow cotan_laplacian()'s rule: degenerate ones are left out, and a needle's
+//! V'_t u_k with u_k = V_t⁻¹ (Q_t S)_k, and V' u = u0 (b' − a') + u1 (c' − a') + u2 n'/√‖n'‖ is linear in B'
+//! but for the scaled normal: a frame computes one scaled normal per base triangle and sums fixed weights
+//! of B' and of those normals per row (O(#V), allocation-free). Triangles of S follow cotan_laplacian()'s rule: degenerate ones are left out, and a needle's
 //! weight is bounded so that its largest |cot| is kMaxCotangent (all three cotangents scaled together, which
 //! keeps Q_t positive semi-definite; clamping them one by one would not). Matrix and right-hand side use the
 //! same Q_t, so G = identity gives back S to rounding. The matrix depends on S only: it is factored once

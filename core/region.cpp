@@ -76,22 +76,28 @@ void Region::validate(int num_vertices, const Faces* F) const {
                          " exists; handle codes must be consecutive");
   if (!F) return;
   const VertexAdjacency adjacency = vertex_adjacency(*F, num_vertices);
-  // A handle of vertices that no face uses moves nothing of the surface (the edit returned the surface at
-  // rest with handle error 0).
-  std::vector<int> example(num_handles_, -1);
-  std::vector<char> on_surface(num_handles_, 0);
-  for (int v = 0; v < num_vertices; ++v)
-    if (const int h = codes_[v] - kFirstHandle; h >= 0) {
-      if (example[h] < 0) example[h] = v;
-      on_surface[h] |= adjacency.begin(v) != adjacency.end(v);
-    }
-  for (int h = 0; h < num_handles_; ++h)
-    if (!on_surface[h])
+  // A handle, or a fixed part, of vertices that no face uses moves or holds nothing of the surface (a
+  // handle left the surface at rest with handle error 0; a fixed part let the whole surface translate).
+  // Group g: the fixed part (0), handle g − 1 (code g + 1).
+  std::vector<int> example(num_handles_ + 1, -1);
+  std::vector<char> on_surface(num_handles_ + 1, 0);
+  for (int v = 0; v < num_vertices; ++v) {
+    if (codes_[v] == kFree) continue;
+    const int g = codes_[v] == kFixed ? 0 : codes_[v] - kFirstHandle + 1;
+    if (example[g] < 0) example[g] = v;
+    on_surface[g] |= adjacency.begin(v) != adjacency.end(v);
+  }
+  for (int g = 0; g <= num_handles_; ++g)
+    if (example[g] >= 0 && !on_surface[g])
       throw TopologyError(
-          "region: handle " + std::to_string(h) + " (selection code " + std::to_string(h + kFirstHandle) +
-          ") holds only vertices that no face uses (e.g. vertex " + std::to_string(example[h]) +
-          "), so it cannot move the surface; select vertices of the surface, or use a space "
-          "method (lattice, cage, rbf), which deforms the space around it");
+          "region: " +
+          (g == 0 ? std::string("the fixed part (selection code 0)")
+                  : "handle " + std::to_string(g - 1) + " (selection code " +
+                        std::to_string(g - 1 + kFirstHandle) + ")") +
+          " holds only vertices that no face uses (e.g. vertex " + std::to_string(example[g]) +
+          "), so it cannot " + (g == 0 ? "hold" : "move") +
+          " the surface; select vertices of the surface, or use a space method (lattice, cage, rbf), which "
+          "deforms the space around it");
   // Flood-fill the free vertices; each component must reach a constrained neighbour.
   std::vector<int> component(num_vertices, -1), stack;
   int num_components = 0;

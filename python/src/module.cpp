@@ -15,12 +15,13 @@
 #include "msdeform/core/blas_kernels.h"
 #include "msdeform/core/edit_case.h"
 #include "msdeform/core/errors.h"
-#include "msdeform/core/mesh.h"
 #include "msdeform/core/memory.h"
+#include "msdeform/core/mesh.h"
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/core/region.h"
 #include "msdeform/core/scenes.h"
 #include "msdeform/core/version.h"
+#include "msdeform/deformation/deformer.h"
 
 namespace msdpy {
 
@@ -681,6 +682,7 @@ of its area: a long tube free between its ends); msdeform.SolverError if a fairi
         if (!transforms.is_none() && static_cast<int>(asked.size()) != region.num_handles())
           throw py::value_error("transforms has " + std::to_string(asked.size()) + " matrices for " +
                                 std::to_string(region.num_handles()) + " handle(s) in labels");
+        msd::check_affine(asked, "shape_change");  // as Deformer.deform: finite, last row (0 0 0 1)
         if (T.rows() == 0) throw py::value_error("F has no faces: there is no shape to measure");
         const msd::ShapeChange c = msd::shape_change(R, D, T, region);
         const std::string warning = msd::shape_change_warning(c, msd::edit_scaling(asked));

@@ -60,6 +60,11 @@ def test_shape_change_is_the_tools_check():
         msdeform.shape_change(V, V, F, labels, [msdeform.scaling(2)] * 2)
     with pytest.raises(ValueError, match="no faces"):
         msdeform.shape_change(V, V, F[:0], labels)
+    # Transforms that Deformer.deform refuses (the second break test: NaN gave "the handles ask for
+    # x3.212e-311 to x1", inf dropped the volume check).
+    for bad in (np.full((4, 4), np.nan), np.diag([np.inf, 1, 1, 1]), np.eye(4) + np.eye(4)[::-1]):
+        with pytest.raises(msdeform.InvalidInput, match="shape_change"):
+            msdeform.shape_change(V, V, F, labels, [bad])
 
 
 def test_rigidity_error_of_rigid_and_scaled_shapes(lift):

@@ -147,4 +147,13 @@ TEST_CASE("region validation refuses a handle that no face reaches", "[core][reg
   CHECK_NOTHROW(r.validate(4));  // a space method deforms space around it
   r.set_handle({2, 3}, 1);       // with a vertex on the surface it moves the surface
   CHECK_NOTHROW(r.validate(4, &F));
+  // The second break test: a fixed part of such vertices only let the whole surface translate.
+  Region loose(4);
+  loose.set_fixed({3});
+  loose.set_handle({1}, 0);
+  CHECK_THROWS_WITH(loose.validate(4, &F),
+                    Contains("the fixed part") && Contains("vertex 3") && Contains("hold"));
+  CHECK_NOTHROW(loose.validate(4));
+  loose.set_fixed({0, 3});
+  CHECK_NOTHROW(loose.validate(4, &F));
 }

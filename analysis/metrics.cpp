@@ -321,12 +321,14 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
       if (region.placed_together(i, j)) continue;
       const double l = (rest.row(i) - rest.row(j)).norm(), l1 = (deformed.row(i) - deformed.row(j)).norm();
       if (!(l > shortest)) continue;
-      const double factor = l1 > 0 ? std::max(l1 / l, l / l1) : INFINITY;
+      const double growth = l1 / l, shrink = l1 > 0 ? l / l1 : INFINITY, factor = std::max(growth, shrink);
       ++c.edges;
       stretched += factor > 1.5;
-      if (factor > c.largest_factor)  // named by its free vertex, else by its handle vertex
-        c.largest_factor = factor,
-        c.largest_vertex = region.code(i) == Region::kFree || region.code(j) == Region::kFixed ? i : j;
+      // Named by its free vertex, else by its handle vertex.
+      const int named = region.code(i) == Region::kFree || region.code(j) == Region::kFixed ? i : j;
+      if (factor > c.largest_factor) c.largest_factor = factor, c.largest_vertex = named;
+      if (growth > c.largest_growth) c.largest_growth = growth, c.growth_vertex = named;
+      if (shrink > c.largest_shrink) c.largest_shrink = shrink, c.shrink_vertex = named;
     }
   }
   if (c.edges > 0) {
@@ -342,7 +344,8 @@ EditScaling edit_scaling(const std::vector<Mat4>& transforms) {
   for (const Mat4& T : transforms) {
     const Mat3 A = T.topLeftCorner<3, 3>();
     const Vec3 sigma = Eigen::JacobiSVD<Mat3>(A).singularValues();  // descending
-    e.stretch = std::max({e.stretch, sigma(0), sigma(2) > 0 ? 1 / sigma(2) : INFINITY});
+    e.growth = std::max(e.growth, sigma(0));
+    e.shrink = std::max(e.shrink, sigma(2) > 0 ? 1 / sigma(2) : INFINITY);
     e.area_low = std::min(e.area_low, sigma(1) * sigma(2));
     e.area_high = std::max(e.area_high, sigma(0) * sigma(1));
     const double det = A.determinant();
@@ -369,9 +372,14 @@ std::string shape_change_warning(const ShapeChange& c, const EditScaling& asked)
     return std::string(text) == " (the handles ask for x1 to x1)" ? std::string() : std::string(text);
   };
   char text[160];
-  if (c.largest_factor > 5 * asked.stretch) {
-    std::snprintf(text, sizeof text, "an edge at vertex %d stretched or shrank %.3g times", c.largest_vertex,
-                  c.largest_factor);
+  if (c.largest_growth > 5 * asked.growth) {
+    std::snprintf(text, sizeof text, "an edge at vertex %d stretched %.3g times", c.growth_vertex,
+                  c.largest_growth);
+    add(text);
+  }
+  if (c.largest_shrink > 5 * asked.shrink) {
+    std::snprintf(text, sizeof text, "an edge at vertex %d shrank %.3g times", c.shrink_vertex,
+                  c.largest_shrink);
     add(text);
   }
   if (c.area_ratio > 1.5 * asked.area_high || c.area_ratio < 2.0 / 3 * asked.area_low) {

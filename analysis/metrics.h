@@ -193,6 +193,10 @@ struct ShapeChange {
   double stretched_share = 0;    //!< of those, the share whose length changed more than 1.5× (grown or shrunk)
   double largest_factor = 1;     //!< the largest change max(l'/l, l/l') of such an edge (inf: one collapsed)
   int largest_vertex = -1;       //!< a vertex of that edge
+  double largest_growth = 1;     //!< the largest l'/l of such an edge
+  int growth_vertex = -1;        //!< a vertex of that edge
+  double largest_shrink = 1;     //!< the largest l/l' of such an edge (inf: collapsed)
+  int shrink_vertex = -1;        //!< a vertex of that edge
   double area_ratio = 1;         //!< area of the triangles with a free vertex, deformed over rest
   std::optional<double> volume_change;  //!< closed meshes: V'/V − 1 (volume_change)
 };
@@ -209,7 +213,8 @@ ShapeChange shape_change(const Positions& rest, const Positions& deformed, const
 //! includes 1. Rigid handles ask for nothing (all 1); a rotation written with 6 digits (the survey's .def
 //! files) asks for factors within 1e-6 of 1.
 struct EditScaling {
-  double stretch = 1;                      //!< the largest of 1, every σ1 and every 1/σ3 (inf: singular)
+  double growth = 1;  //!< edges may grow by up to this: the largest of 1 and every σ1
+  double shrink = 1;  //!< and shrink by up to this: the largest of 1 and every 1/σ3 (inf: singular)
   double area_low = 1, area_high = 1;      //!< area factors asked: min(1, σ2σ3) to max(1, σ1σ2)
   double volume_low = 1, volume_high = 1;  //!< volume factors asked: min(1, |det A|) to max(1, |det A|)
   bool mirrors = false;                    //!< some det A < 0: a mirrored part turns its volume's sign
@@ -220,7 +225,8 @@ struct EditScaling {
 EditScaling edit_scaling(const std::vector<Mat4>& transforms);
 
 //! Empty, or why the result lost the shape, against what the edit asks (`asked`, edit_scaling()): an edge
-//! stretched or shrunk by more than 5× the edit's own stretch (tears and collapses; on the built-in
+//! grown by more than 5× the growth asked or shrunk by more than 5× the shrink asked (a flattened handle
+//! asks for any shrink and no growth; a 57× stretch under one went unwarned), tears and collapses (on the
 //! benchmark the shell, Laplacian editing, lattice and cages do this under bends and twists, ARAP, gradient
 //! editing and deformation transfer stay below 4.5×), the free region's area changed by more than 1.5×
 //! area_high or below 2/3 of area_low, or a closed mesh's volume by more than 30 % beyond the range asked

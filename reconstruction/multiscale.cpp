@@ -152,10 +152,12 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
     r.warnings.push_back(
         name_ + ": " + std::to_string(r.folded_faces) + (r.folded_faces == 1 ? " triangle" : " triangles") +
         " folded over the deformed base; " +
-        (mirrors       ? "a handle transform mirrors, so the surface between it and the rest turns over"
-         : d.hierarchy ? "a finer control mesh or the low-pass base keeps them apart"
-                       : "a smaller detail scale keeps them apart (the other encodings fold more or less "
-                         "depending on the edit: msdeform compare measures them)"));
+        (mirrors
+             ? "a mirroring handle transform folds the surface around it whatever the encoding; elsewhere "
+             : "") +
+        (d.hierarchy ? "a finer control mesh or the low-pass base keeps them apart"
+                     : "a smaller detail scale keeps them apart (the other encodings fold more or less "
+                       "depending on the edit: msdeform compare measures them)"));
 }
 
 void MultiscaleDeformer::do_reset() {

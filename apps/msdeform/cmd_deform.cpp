@@ -22,11 +22,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 // What to change when a multi-scale frame folded triangles over its base.
-std::string fold_advice(const Deformer& deformer, const std::vector<Mat4>& transforms) {
-  // The break test's mirrored handle: the advice to switch encodings led to an encoding that folded too.
-  if (edit_scaling(transforms).mirrors)
-    return "no method or encoding avoids these folds under a mirroring handle transform (negative "
-           "determinant)";
+std::string fold_remedy(const Deformer& deformer) {
   const auto* ms = dynamic_cast<const MultiscaleDeformer*>(&deformer);
   if (!ms) return "the edit is too strong for this method";
   const DecompositionKind kind = ms->options().decomposition.kind;
@@ -38,6 +34,18 @@ std::string fold_advice(const Deformer& deformer, const std::vector<Mat4>& trans
                                   : "use a smaller --detail-scale";
   if (e == EncodingKind::Normal || e == EncodingKind::Vectors) return "try --encoding transfer or volumes, or " + smaller;
   return smaller;
+}
+
+// What may keep folds apart; a mirroring handle's own folds no method avoids (the break tests: the advice to
+// switch encodings under a mirror led to an encoding that folded too; a small mirrored patch elsewhere
+// must not hide the advice for a bend's folds).
+std::string fold_advice(const Deformer& deformer, const std::vector<Mat4>& transforms) {
+  const std::string advice = fold_remedy(deformer);
+  if (!edit_scaling(transforms).mirrors) return advice;
+  return "a mirroring handle transform (negative determinant) folds the surface around it whatever the "
+         "method "
+         "or encoding; for folds elsewhere, " +
+         advice;
 }
 
 }  // namespace

@@ -41,8 +41,9 @@ struct TriangleCotangents {
   //! The cotangents cotan_laplacian() weighs with: cot, scaled together so the largest is at most
   //! ±LaplaceOperator::kMaxCotangent (clamping one by one would make a needle's weights indefinite).
   double weight[3] = {0, 0, 0};
-  //! Twice the area at most 2 · kDegenerateAreaRatio · (longest edge)², or not a number: cotan_laplacian()
-  //! leaves the face out (cot stays 0).
+  //! Twice the area at most 2 · kDegenerateAreaRatio · (longest edge)², or within the rounding of the
+  //! corners' coordinates (4 ε · their largest magnitude · longest edge: the same triangle moved far from
+  //! the origin stays degenerate), or not a number: cotan_laplacian() leaves the face out (cot stays 0).
   bool degenerate = false;
   //! Corners with |cot| > LaplaceOperator::kMaxCotangent (cotan_laplacian() scales the triangle's cotangents
   //! down together): a needle.
@@ -50,7 +51,7 @@ struct TriangleCotangents {
   static constexpr double kDegenerateAreaRatio = 1e-14;
 };
 
-//! Classifies the triangle (p0, p1, p2) exactly as cotan_laplacian() does; scale-invariant (a ratio test).
+//! Classifies the triangle (p0, p1, p2) exactly as cotan_laplacian() does; scale-invariant (ratio tests).
 TriangleCotangents triangle_cotangents(const Vec3& p0, const Vec3& p1, const Vec3& p2);
 
 //! Cotan weights and mixed-Voronoi mass of (P #V×3, F #F×3). A face whose area is below 1e-14 times its

@@ -115,6 +115,27 @@ TEST_CASE("degenerate and needle triangles give finite operators and are reporte
   CHECK(gradient_operator(P, F).coeffs().allFinite());
 }
 
+TEST_CASE("a zero-area triangle stays degenerate far from the origin, a needle stays a needle",
+          "[core][laplacian]") {
+  // The second break test: zero-area triangles of the lift moved by (1e6, 5e5, -1e6) came back from the
+  // rounding as needles of area 1e-9 of their edges', clamped instead of left out (results 7e-5 of the
+  // diagonal off the edit at the origin), and the fold check counted them as folds.
+  const Vec3 a(0, 0, 0), b(0.01, 0, 0), c(0.02, 0, 0), far(1e6, 5e5, -1e6);
+  CHECK(triangle_cotangents(a, b, c).degenerate);
+  CHECK(triangle_cotangents(a + far, b + far, c + far).degenerate);
+  // Collinear as read: rounded to the coordinates' precision, not exactly on a line.
+  const Vec3 d(0.0123456789, 0.00987654321, 0), e = 2 * d;
+  const TriangleCotangents rounded = triangle_cotangents(a + far, d + far, e + far);
+  CHECK(rounded.degenerate);
+  // A needle well above the rounding stays one, at the origin and far from it.
+  const Vec3 tip(0.02, 1e-7, 0);  // cotangent 2e5 at a
+  for (const Vec3& shift : {Vec3(0, 0, 0), Vec3(1e3, 1e3, 1e3)}) {
+    const TriangleCotangents needle = triangle_cotangents(a + shift, c + shift, tip + shift);
+    CHECK_FALSE(needle.degenerate);
+    CHECK(needle.needle_corners > 0);
+  }
+}
+
 TEST_CASE("uniform Laplacian: rows sum to zero, diagonal is minus the degree", "[core][laplacian]") {
   Positions P;
   Faces F;

@@ -55,8 +55,8 @@ struct TriangleCotangents {
 TriangleCotangents triangle_cotangents(const Vec3& p0, const Vec3& p1, const Vec3& p2);
 
 //! Cotan weights and mixed-Voronoi mass of (P #V×3, F #F×3). A face whose area is below 1e-14 times its
-//! squared longest edge counts as degenerate and contributes nothing; cotangents are clamped, so the
-//! result is always finite.
+//! squared longest edge, or within the rounding of its coordinates (TriangleCotangents::degenerate), counts
+//! as degenerate and contributes nothing; cotangents are clamped, so the result is always finite.
 LaplaceOperator cotan_laplacian(const Positions& P, const Faces& F);
 
 //! The Laplace operator of (P #V×3, F #F×3) with the given weights. Indices are not checked here;

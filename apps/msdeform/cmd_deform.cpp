@@ -43,8 +43,7 @@ std::string fold_advice(const Deformer& deformer, const std::vector<Mat4>& trans
   const std::string advice = fold_remedy(deformer);
   if (!edit_scaling(transforms).mirrors) return advice;
   return "a mirroring handle transform (negative determinant) folds the surface around it whatever the "
-         "method "
-         "or encoding; for folds elsewhere, " +
+         "method or encoding; for folds elsewhere, " +
          advice;
 }
 

@@ -146,13 +146,15 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
         w.rfind(base_deformer_->name() + kHandleTransformWarning, 0) != 0)
       r.warnings.push_back(w);
   r.folded_faces = fold_check_.count(out, base_deformed_, transforms);
-  const bool mirrors = std::any_of(transforms.begin(), transforms.end(),
-                                   [](const Mat4& T) { return T.topLeftCorner<3, 3>().determinant() < 0; });
+  const auto mirrors = [&] {
+    return std::any_of(transforms.begin(), transforms.end(),
+                       [](const Mat4& T) { return T.topLeftCorner<3, 3>().determinant() < 0; });
+  };
   if (r.folded_faces > 0)
     r.warnings.push_back(
         name_ + ": " + std::to_string(r.folded_faces) + (r.folded_faces == 1 ? " triangle" : " triangles") +
         " folded over the deformed base; " +
-        (mirrors
+        (mirrors()
              ? "a mirroring handle transform folds the surface around it whatever the encoding; elsewhere "
              : "") +
         (d.hierarchy ? "a finer control mesh or the low-pass base keeps them apart"

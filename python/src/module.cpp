@@ -710,7 +710,7 @@ handles' own scaling asks; None otherwise). rest, deformed (#V, 3); F (#F, 3), a
 (#V,) codes; transforms: the edit's, one per handle: a handle scaled by s asks for edges, areas and
 volumes to change by up to s, s^2 and s^3 (the volume is not judged when one mirrors; None: no handle
 scales). Raises ValueError for mismatched shapes, no face, or a transform count other
-than the handles'.)doc");
+than the handles'; msdeform.InvalidInput for a transform that is not finite or not affine.)doc");
   m.def(
       "volume",
       [](PositionsArg V, FacesArg F) {

@@ -62,7 +62,7 @@ std::vector<int> Region::handle_vertices(int handle) const {
   return vertices_where(codes_, [&](int c) { return c == kFirstHandle + handle; });
 }
 
-void Region::validate(int num_vertices, const Faces* F) const {
+void Region::validate(int num_vertices, const Faces* F, const std::vector<char>* usable) const {
   if (this->num_vertices() != num_vertices)
     throw InvalidInput("region has " + std::to_string(this->num_vertices()) + " vertex labels but the mesh has " +
                        std::to_string(num_vertices) + " vertices");
@@ -76,16 +76,20 @@ void Region::validate(int num_vertices, const Faces* F) const {
                          " exists; handle codes must be consecutive");
   if (!F) return;
   const VertexAdjacency adjacency = vertex_adjacency(*F, num_vertices);
-  // A handle, or a fixed part, of vertices that no face uses moves or holds nothing of the surface (a
-  // handle left the surface at rest with handle error 0; a fixed part let the whole surface translate).
-  // Group g: the fixed part (0), handle g − 1 (code g + 1).
+  // A handle, or a fixed part, of vertices that no (usable) face uses moves or holds nothing of the surface
+  // (a handle left the surface at rest with handle error 0; a fixed part let the whole surface translate;
+  // likewise through zero-area faces only). Group g: the fixed part (0), handle g − 1 (code g + 1).
+  std::vector<char> on_face(num_vertices, 0);
+  for (Eigen::Index f = 0; f < F->rows(); ++f)
+    if (!usable || (*usable)[f])
+      for (int k = 0; k < 3; ++k) on_face[(*F)(f, k)] = 1;
   std::vector<int> example(num_handles_ + 1, -1);
   std::vector<char> on_surface(num_handles_ + 1, 0);
   for (int v = 0; v < num_vertices; ++v) {
     if (codes_[v] == kFree) continue;
     const int g = codes_[v] == kFixed ? 0 : codes_[v] - kFirstHandle + 1;
     if (example[g] < 0) example[g] = v;
-    on_surface[g] |= adjacency.begin(v) != adjacency.end(v);
+    on_surface[g] |= on_face[v];
   }
   for (int g = 0; g <= num_handles_; ++g)
     if (example[g] >= 0 && !on_surface[g])
@@ -94,8 +98,8 @@ void Region::validate(int num_vertices, const Faces* F) const {
           (g == 0 ? std::string("the fixed part (selection code 0)")
                   : "handle " + std::to_string(g - 1) + " (selection code " +
                         std::to_string(g - 1 + kFirstHandle) + ")") +
-          " holds only vertices that no face uses (e.g. vertex " + std::to_string(example[g]) +
-          "), so it cannot " + (g == 0 ? "hold" : "move") +
+          " holds only vertices that no face " + (usable ? "of nonzero area " : "") + "uses (e.g. vertex " +
+          std::to_string(example[g]) + "), so it cannot " + (g == 0 ? "hold" : "move") +
           " the surface; select vertices of the surface, or use a space method (lattice, cage, rbf), which "
           "deforms the space around it");
   // Flood-fill the free vertices; each component must reach a constrained neighbour.

@@ -53,9 +53,12 @@ class Region {
   //! 0..num_handles()-1 non-empty. With faces (F #F by 3, a surface method), also that every connected
   //! component of free vertices touches a fixed or handle vertex through an edge of F (else its shape is
   //! undetermined and the systems are singular); space methods pass no faces.
+  //! With faces, also that the fixed part and every handle hold a vertex of a face, of a face whose
+  //! `usable` entry is nonzero when `usable` (#F flags) is given: surface methods leave degenerate faces
+  //! out, so a fixed part or handle touching only those holds or moves nothing of the surface.
   //! \throw InvalidInput on a count mismatch or an empty handle; TopologyError naming the component, its
-  //! size and one of its vertices.
-  void validate(int num_vertices, const Faces* F = nullptr) const;
+  //! size and one of its vertices, or the fixed part or handle and one of its vertices.
+  void validate(int num_vertices, const Faces* F = nullptr, const std::vector<char>* usable = nullptr) const;
 
  private:
   void set(const std::vector<int>& vertices, int code);

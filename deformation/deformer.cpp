@@ -15,6 +15,7 @@
 #include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/mesh.h"
+#include "msdeform/core/parallel.h"
 #include "msdeform/core/rotation.h"
 #include "msdeform/core/surface_check.h"
 
@@ -208,7 +209,19 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
                                   " face(s) wound against their neighbours (normals and detail directions flip "
                                   "there); orient them first (check_surface, or load the mesh with load_mesh)");
   }
-  region.validate(static_cast<int>(P.rows()), surface ? &F : nullptr);
+  if (surface && traits().cotan_laplacian) {
+    // These methods leave degenerate triangles out: a fixed part or handle touching only those holds or
+    // moves nothing (second break test: a fixed vertex whose one face had zero area let the surface
+    // translate).
+    std::vector<char> usable(F.rows());
+    parallel_for_chunks(static_cast<long>(F.rows()), [&](long begin, long end) {
+      for (long f = begin; f < end; ++f)
+        usable[f] = !triangle_cotangents(P.row(F(f, 0)), P.row(F(f, 1)), P.row(F(f, 2))).degenerate;
+    });
+    region.validate(static_cast<int>(P.rows()), &F, &usable);
+  } else {
+    region.validate(static_cast<int>(P.rows()), surface ? &F : nullptr);
+  }
   if (region.num_handles() == 0)
     throw InvalidInput(name() + ": the region has no handle vertex (selection code 2 or higher); nothing to move");
   if (std::string torn = torn_edges_warning(F, region, name()); !torn.empty())

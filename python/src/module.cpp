@@ -689,9 +689,13 @@ of its area: a long tube free between its ends); msdeform.SolverError if a fairi
         py::dict d;
         d["edges"] = c.edges;
         d["stretched_share"] = c.stretched_share;
+        const auto vertex = [](int v) { return v >= 0 ? py::object(py::int_(v)) : py::object(py::none()); };
         d["largest_factor"] = c.largest_factor;
-        d["largest_vertex"] =
-            c.largest_vertex >= 0 ? py::object(py::int_(c.largest_vertex)) : py::object(py::none());
+        d["largest_vertex"] = vertex(c.largest_vertex);
+        d["largest_growth"] = c.largest_growth;
+        d["growth_vertex"] = vertex(c.growth_vertex);
+        d["largest_shrink"] = c.largest_shrink;
+        d["shrink_vertex"] = vertex(c.shrink_vertex);
         d["area_ratio"] = c.area_ratio;
         d["volume_change"] =
             c.volume_change ? py::object(py::float_(*c.volume_change)) : py::object(py::none());
@@ -703,7 +707,8 @@ of its area: a long tube free between its ends); msdeform.SolverError if a fairi
       R"doc(The shape check of `msdeform deform`'s report, which a frame does not make (it is O(#F)): a dict
 with edges (the edges measured: those with a free vertex, or between differently placed vertices),
 stretched_share (of those, the share whose length changed beyond 1.5x), largest_factor and largest_vertex
-(the largest change max(l'/l, l/l') and a vertex of that edge), area_ratio (of the triangles with a free
+(the largest change max(l'/l, l/l') and a vertex of that edge; largest_growth l'/l and largest_shrink
+l/l' apart, with growth_vertex and shrink_vertex), area_ratio (of the triangles with a free
 vertex), volume_change (closed meshes, else None) and warning (the tool's warning text where an edge
 changed beyond 5x, the area beyond 1.5x or below 2/3, or the volume by over 30 %, each beyond what the
 handles' own scaling asks; None otherwise). rest, deformed (#V, 3); F (#F, 3), at least one face; labels

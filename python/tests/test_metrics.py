@@ -52,6 +52,8 @@ def test_shape_change_is_the_tools_check():
     # A handle scaled by 1.001 asks for areas of x1 to x1.002, not x4 (any scale silenced the check).
     slightly = msdeform.shape_change(V, 2 * V, F, labels, [msdeform.scaling(1.001)])
     assert "area changed x4 (the handles ask for x1 to x1.002)" in slightly["warning"]
+    assert doubled["largest_growth"] == pytest.approx(2) and doubled["largest_shrink"] == pytest.approx(1)
+    assert doubled["growth_vertex"] is not None and doubled["shrink_vertex"] is None  # no edge shrank
     ten = msdeform.shape_change(V, 10 * V, F, labels, [msdeform.scaling(10)])
     assert ten["largest_factor"] == pytest.approx(10) and ten["warning"] is None  # asked for (it warned)
     with pytest.raises(ValueError):

@@ -156,4 +156,14 @@ TEST_CASE("region validation refuses a handle that no face reaches", "[core][reg
   CHECK_NOTHROW(loose.validate(4));
   loose.set_fixed({0, 3});
   CHECK_NOTHROW(loose.validate(4, &F));
+  // Third break test: through faces the surface methods leave out (zero area) only, likewise.
+  Faces two(2, 3);
+  two << 0, 1, 2, 1, 3, 2;  // the second face stands for a zero-area one
+  const std::vector<char> usable = {1, 0};
+  Region through(4);
+  through.set_fixed({0});
+  through.set_handle({3}, 0);
+  CHECK_NOTHROW(through.validate(4, &two));
+  CHECK_THROWS_WITH(through.validate(4, &two, &usable),
+                    Contains("handle 0") && Contains("no face of nonzero area uses") && Contains("vertex 3"));
 }

@@ -26,14 +26,22 @@ struct Corner {
 bool degenerate_triangle(const Vec3 (&p)[3], double area2) {
   const double longest2 =
       std::max({(p[1] - p[0]).squaredNorm(), (p[2] - p[1]).squaredNorm(), (p[0] - p[2]).squaredNorm()});
+  return degenerate_area(
+      area2, longest2,
+      std::max({p[0].cwiseAbs().maxCoeff(), p[1].cwiseAbs().maxCoeff(), p[2].cwiseAbs().maxCoeff()}));
+}
+
+}  // namespace
+
+bool degenerate_area(double area2, double longest2, double largest_coordinate) {
   // Below the rounding of the corners' coordinates too (each within eps·m of the point meant, m their largest
   // magnitude: twice the area within about 4·eps·m·longest of its value): a zero-area triangle moved 1e6
   // from the origin came back as a needle of area 1e-9 of its edges', and changed the results.
-  const double m =
-      std::max({p[0].cwiseAbs().maxCoeff(), p[1].cwiseAbs().maxCoeff(), p[2].cwiseAbs().maxCoeff()});
-  const double noise = 4 * std::numeric_limits<double>::epsilon() * m * std::sqrt(longest2);
+  const double noise = 4 * std::numeric_limits<double>::epsilon() * largest_coordinate * std::sqrt(longest2);
   return !(area2 > std::max(2 * TriangleCotangents::kDegenerateAreaRatio * longest2, noise));  // also NaN
 }
+
+namespace {
 
 Corner corner(const Positions& P, const Faces& F, Eigen::Index f) {
   Corner c;

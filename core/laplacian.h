@@ -54,6 +54,11 @@ struct TriangleCotangents {
 //! Classifies the triangle (p0, p1, p2) exactly as cotan_laplacian() does; scale-invariant (ratio tests).
 TriangleCotangents triangle_cotangents(const Vec3& p0, const Vec3& p1, const Vec3& p2);
 
+//! TriangleCotangents::degenerate's rule on a triangle's measures, in any one unit: twice its area, its
+//! squared longest edge and the largest magnitude of its corners' coordinates (for callers that measure
+//! in a scaled frame, like the fold check).
+bool degenerate_area(double area2, double longest2, double largest_coordinate);
+
 //! Cotan weights and mixed-Voronoi mass of (P #V×3, F #F×3). A face whose area is below 1e-14 times its
 //! squared longest edge, or within the rounding of its coordinates (TriangleCotangents::degenerate), counts
 //! as degenerate and contributes nothing; cotangents are clamped, so the result is always finite.

@@ -119,13 +119,11 @@ Vec3 unit_scale_normal(const phong::Columns& X, const int* t) {
   e1 /= scale, e2 /= scale;
   const Vec3 n = e1.cross(e2);
   const double longest2 = std::max({e1.squaredNorm(), e2.squaredNorm(), (e2 - e1).squaredNorm()});
-  // Degenerate as triangle_cotangents() says, also within the rounding of coordinates far from the origin.
+  // Degenerate as triangle_cotangents() says, measured in units of `scale`.
   const double m = std::max({p0.cwiseAbs().maxCoeff(), X.row(t[1]).cwiseAbs().maxCoeff(),
                              X.row(t[2]).cwiseAbs().maxCoeff()}) /
                    scale;
-  const double noise = 4 * std::numeric_limits<double>::epsilon() * m * std::sqrt(longest2);
-  if (!(n.norm() > std::max(2 * TriangleCotangents::kDegenerateAreaRatio * longest2, noise)))
-    return Vec3::Zero();
+  if (degenerate_area(n.norm(), longest2, m)) return Vec3::Zero();
   return n / n.cwiseAbs().maxCoeff();
 }
 

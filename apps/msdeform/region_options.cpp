@@ -12,6 +12,7 @@
 #include "msdeform/core/errors.h"
 #include "msdeform/core/extent.h"
 #include "msdeform/core/mesh_io.h"
+#include "msdeform/core/rotation.h"
 
 namespace msd::cli {
 namespace {
@@ -310,6 +311,15 @@ std::vector<Mat4> RegionOptions::build_transforms(const Positions& P, const Regi
         throw InvalidInput(step + ": handle " + std::to_string(k) + "'s transform reaches an entry of " +
                            format_number(T[k].cwiseAbs().maxCoeff()) +
                            " at this step; msdeform works with sizes up to 1e70, in every step of a composition");
+      // Two mirrors compose into a turn by twice the angle between their planes: --scale -1,1,1 --scale
+      // 1,-1,1 is the half turn that --scale -1,-1,1 is refused as (the steps' own turns do not show it).
+      const Mat3 A = T[k].topLeftCorner<3, 3>();
+      if (A.determinant() > 0 && !(turn_degrees(A) < 180 - 1e-9))
+        throw InvalidInput(
+            step + ": the transform of handle " + std::to_string(k) +
+            " turns it by half a turn here (mirrors compose into a turn: two across perpendicular "
+            "planes make a half turn), and which way round a half turn goes is not defined; give a "
+            "transform that turns the handle by less than 180 degrees");
     }
   }
   return T;

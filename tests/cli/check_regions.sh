@@ -176,6 +176,9 @@ expect_error 1 "--scale -1,-1,1: the turns of handle 0 add up to 180 degrees" \
   "$msdeform" deform lift.off --handle vertex:0,1 --scale -1,-1,1 --rotate 0,0,1,90 -o x.off
 expect_error 1 "--scale -1: the turns of handle 0 add up to 180 degrees" \
   "$msdeform" deform lift.off --handle vertex:0,1 --scale -1 -o x.off
+# Two mirrors across perpendicular planes are the half turn -1,-1,1 is (they passed, one step at a time).
+expect_error 1 "--scale 1,-1,1: the transform of handle 0 turns it by half a turn here" \
+  "$msdeform" deform lift.off --handle vertex:0,1 --scale -1,1,1 --scale 1,-1,1 -o x.off
 expect_error 1 "add up to 180.0001 degrees" \
   "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,0,1,179.9999 --rotate 0,0,1,0.0002 -o x.off
 "$msdeform" deform lift.off --handle vertex:0,1 --rotate 0,1,0,179 --method shell -o turned.off >/dev/null 2>&1 ||

@@ -1,10 +1,13 @@
 #include "msdeform/core/mesh_info.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <numeric>
 #include <vector>
 
+#include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/surface_check.h"
 #include "msdeform/core/weld.h"
@@ -50,7 +53,7 @@ MeshInfo mesh_info(const Positions& P, const Faces& F) {
     size_t j = i + 1;
     while (j < keys.size() && keys[j] == keys[i]) ++j;
     const int a = static_cast<int>(keys[i] >> 32), b = static_cast<int>(keys[i] & 0xffffffffu);
-    total_length += (P.row(a) - P.row(b)).norm();
+    total_length += (P.row(a) - P.row(b)).stableNorm();  // no overflow of the squares at 1e200
     ++info.edges;
     if (j - i == 1) {
       ++info.boundary_edges;
@@ -60,8 +63,15 @@ MeshInfo mesh_info(const Positions& P, const Faces& F) {
     i = j;
   }
   if (info.edges > 0) info.mean_edge_length = total_length / info.edges;
-  if (info.seam_vertices == 0 && info.boundary_edges > 0 && info.mean_edge_length > 0) {
-    info.near_seam_distance = 1e-3 * info.mean_edge_length;
+  if (info.vertices > 0) {
+    try {
+      check_extent(P, "sizes");
+    } catch (const InvalidInput& e) {
+      info.size_problem = e.what();
+    }
+  }
+  if (info.seam_vertices == 0 && info.boundary_edges > 0 && info.mean_edge_length > 0 &&
+      std::isfinite(info.near_seam_distance = 1e-3 * info.mean_edge_length)) {
     info.near_seam_vertices = count_seam_vertices(P, oriented, info.near_seam_distance);
   }
   info.euler_characteristic = info.vertices - info.edges + info.faces;

@@ -25,6 +25,8 @@ struct MeshInfo {
   int nonorientable_components = 0;  //!< components that cannot be oriented consistently
   int flipped_faces = 0;             //!< faces wound against their neighbours (the loaders turn them over)
   std::string surface_problem;       //!< SurfaceCheck::problem(): empty for a manifold triangle mesh
+  //! check_extent()'s refusal (sizes beyond 1e-70..1e70, or no extent): empty when the sizes are fine
+  std::string size_problem;
   Vec3 bbox_min = Vec3::Zero(), bbox_max = Vec3::Zero();
   double mean_edge_length = 0;   //!< over the distinct edges
   int euler_characteristic = 0;  //!< V - E + F

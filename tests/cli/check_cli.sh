@@ -226,6 +226,10 @@ with open("split.off", "w") as out:
 open("split.sel", "w").write("\n".join(labels) + "\n")
 PY
 "$msdeform" info split.off | grep -q "seam vertices  *[1-9]" || fail "info does not count the seam"
+# Sizes beyond msdeform's range are named by info too (it stopped in the seam count with an internal message).
+printf 'OFF\n4 2 0\n0 0 0\n1e200 0 0\n0 1e200 0\n1e200 1e200 0\n3 0 1 2\n3 1 3 2\n' > huge.off
+"$msdeform" info huge.off > out.txt 2>&1 || fail "info on coordinates of 1e200"
+grep -q "sizes  *coordinates too large" out.txt || fail "info does not name the sizes beyond 1e70"
 "$msdeform" deform split.off --sel split.sel --def lift.def --method shell -o apart.off >/dev/null 2>err.txt ||
   fail "deform of the split plane"
 grep -q "split along seams" err.txt || fail "no seam warning"

@@ -91,8 +91,12 @@ void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::s
                        : rank == 2 ? "singular: it flattens the handle onto a plane"
                        : rank == 1 ? "singular: it collapses the handle onto a line"
                                    : "singular: it collapses the handle to a point";
-    std::snprintf(text, sizeof text, "%s%s%zu is %s (singular values %.3g, %.3g, %.3g)", who.c_str(),
-                  kHandleTransformWarning, k, what, sigma(0), sigma(1), sigma(2));
+    if (reflection)  // its singular values may all read 1 to 3 digits (-1.001, 1, 1)
+      std::snprintf(text, sizeof text, "%s%s%zu is %s (determinant %.6g)", who.c_str(),
+                    kHandleTransformWarning, k, what, A.determinant());
+    else
+      std::snprintf(text, sizeof text, "%s%s%zu is %s (singular values %.3g, %.3g, %.3g)", who.c_str(),
+                    kHandleTransformWarning, k, what, sigma(0), sigma(1), sigma(2));
     warnings.emplace_back(text);
   }
 }

@@ -354,11 +354,16 @@ TEST_CASE("conformance: every method warns once about a singular, reflecting or 
   half.topLeftCorner<3, 3>() = Eigen::AngleAxisd(M_PI, Vec3(0, 0, 1)).toRotationMatrix();
   turn.topLeftCorner<3, 3>() = Eigen::AngleAxisd(2.5, Vec3(0, 0, 1)).toRotationMatrix();
   const std::vector<std::pair<Mat4, const char*>> cases = {
-      {Mat4(Eigen::Vector4d(-1, 1, 1, 1).asDiagonal()), "is a reflection: it turns the handle inside out"},
+      {Mat4(Eigen::Vector4d(-1, 1, 1, 1).asDiagonal()),
+       "is a reflection: it turns the handle inside out (determinant -1)"},
+      // Its singular values all read 1 to three digits: the determinant says how far it mirrors.
+      {Mat4(Eigen::Vector4d(-1.001, 1, 1, 1).asDiagonal()),
+       "is a reflection: it turns the handle inside out (determinant -1.001)"},
       {Mat4(Eigen::Vector4d(1, 1, 0, 1).asDiagonal()), "is singular: it flattens the handle onto a plane"},
       {Mat4(Eigen::Vector4d(0, 0, 0, 1).asDiagonal()), "is singular: it collapses the handle to a point"},
       // A uniform scale by 1e-12 keeps full rank relative to its largest singular value (it was not warned).
-      {Mat4(Eigen::Vector4d(1e-12, 1e-12, 1e-12, 1).asDiagonal()), "is singular: it collapses the handle to a point"},
+      {Mat4(Eigen::Vector4d(1e-12, 1e-12, 1e-12, 1).asDiagonal()),
+       "is singular: it collapses the handle to a point"},
       {Mat4(Eigen::Vector4d(1e-3, 1e-3, 1e-3, 1).asDiagonal()), nullptr},
       {half, "is a half turn (180 degrees): which way round the handle turns is not defined"},
       {turn, nullptr}};

@@ -48,7 +48,9 @@ Catalogue make_builtin() {
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<LaplacianEditing>(s.laplacian); }});
   c.add({"arap", "9.8", "as-rigid-as-possible (Sorkine & Alexa 2007): local rotations and a global solve factored once, warm-started",
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<ArapDeformer>(s.arap); }});
-  c.add({"primo", "9.8", "PriMo (Botsch et al. 2006): a rigid prism per face, coupled across shared edges; Levenberg-Marquardt on the prisms' motions",
+  c.add({"primo", "9.8",
+         "PriMo (Botsch et al. 2006): a rigid prism per face, coupled across shared edges; damped Newton "
+         "with a line search on the prisms' motions",
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<PrimoDeformer>(s.primo); }});
   c.add({"lattice", "9.5.1", "lattice free-form deformation: cubic B-spline lattice, handles by the least-norm solve (9.13)",
          [](const MethodSettings& s, const Catalogue&) { return std::make_unique<LatticeDeformer>(s.lattice); }});

@@ -68,7 +68,31 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
     if (std::find(scenes.begin(), scenes.end(), r.scene) == scenes.end()) scenes.push_back(r.scene);
   for (const std::string& scene : scenes) {
     const std::vector<size_t> ids = of_scene(results, scene);
-    auto broken = [&](const MethodResult& r) { return r.self_intersections > 0 || r.folded_faces > 0; };
+    // Why a result lost the shape (empty: it did not): self-intersections, folds, a blown-up rigidity or
+    // volume.
+    auto lost_shape = [&](const MethodResult& r) {
+      std::string why;
+      const auto add = [&](const std::string& text) { why += (why.empty() ? "" : "; ") + text; };
+      if (r.self_intersections > 0)
+        add(std::to_string(r.self_intersections) + " self-intersecting triangle pairs" +
+            (r.rest_self_intersections > 0
+                 ? " besides the input's own " + std::to_string(r.rest_self_intersections)
+                 : std::string()));
+      if (r.folded_faces > 0)
+        add(std::to_string(r.folded_faces) + (r.folded_faces == 1 ? " triangle" : " triangles") +
+            " folded over the base");
+      const double grown = 2 * r.scaling.growth - 1;
+      if (r.rigidity.count > 0 && r.rigidity.mean > t.broken_rigidity * grown * grown)
+        add("rigidity " + fmt("%.3g", r.rigidity.mean) + ", as if every one-ring had grown " +
+            fmt("%.2g", 1 + std::sqrt(r.rigidity.mean)) + " times (the shape is lost)");
+      if (r.volume_change && !r.scaling.mirrors) {
+        const double ratio = 1 + *r.volume_change;
+        if (ratio > t.broken_volume * r.scaling.volume_high || ratio * t.broken_volume < r.scaling.volume_low)
+          add("volume changed by " + fmt("%+.3g", 100 * *r.volume_change) + " % (the shape is lost)");
+      }
+      return why;
+    };
+    auto broken = [&](const MethodResult& r) { return !lost_shape(r).empty(); };
     double best_rigidity = INFINITY;
     bool best_counted = true;  // the most rigid result had its self-intersections counted (else: not known unbroken)
     for (size_t i : ids)
@@ -87,14 +111,7 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
       }
       if (broken(r)) {
         a.verdict = Verdict::Broken;
-        if (r.self_intersections > 0)
-          a.reason = std::to_string(r.self_intersections) + " self-intersecting triangle pairs" +
-                     (r.rest_self_intersections > 0
-                          ? " besides the input's own " + std::to_string(r.rest_self_intersections)
-                          : std::string());
-        if (r.folded_faces > 0)
-          a.reason += (a.reason.empty() ? "" : "; ") + std::to_string(r.folded_faces) +
-                      (r.folded_faces == 1 ? " triangle" : " triangles") + " folded over the base";
+        a.reason = lost_shape(r);
         continue;
       }
       // Without a self-intersection count, nothing says the result is unbroken: at most fair, and said so.

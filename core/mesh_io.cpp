@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <numeric>
 #include <sstream>
 #include <string_view>
@@ -19,6 +20,7 @@
 
 #include "msdeform/core/atomic_file.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/surface_check.h"
 
 namespace msd {
@@ -30,7 +32,9 @@ struct FileContents {
   std::vector<double> vertex_property;  // PLY: the values of the property asked for (PlyReader)
   std::vector<int> corners, offsets{0}, lines;
   int first_ignored_line = 0;  // OFF and ASCII PLY: the first line of data after the header's counts
-  int first_attribute_line = 0;  // OFF: the first record with numbers past its coordinates or indices
+  // OFF: the first record with numbers past its coordinates or indices; OBJ: the first vt, vn, usemtl or
+  // mtllib
+  int first_attribute_line = 0;
 };
 
 // Longest line a text reader looks through for its end: a text file's line is far shorter, so a bad file
@@ -294,6 +298,10 @@ FileContents read_obj(std::string_view text, const std::string& path, const std:
                return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
              }))
       reader.fail("not an OBJ statement: '" + printable(key.substr(0, 40)) + "'");
+    // Texture coordinates, normals and materials a written result will not have.
+    else if ((key == "vt" || key == "vn" || key == "usemtl" || key == "mtllib") &&
+             soup.first_attribute_line == 0)
+      soup.first_attribute_line = reader.number();
   }
   // Indices in OBJ's own numbering (from 1), so the message matches the file.
   for (size_t f = 0; f + 1 < soup.offsets.size(); ++f)
@@ -330,7 +338,12 @@ class PlyReader {
             continue;
           }
           const double n = value(prop.list_count_type);  // an integer type (parse_header)
-          const bool indices = e.name == "face" && (prop.name == "vertex_indices" || prop.name == "vertex_index");
+          const bool corner_list = prop.name == "vertex_indices" || prop.name == "vertex_index";
+          if (e.name == "tristrips" && corner_list) {
+            read_strips(n, prop.type, i, item_line, soup);
+            continue;
+          }
+          const bool indices = e.name == "face" && corner_list;
           // Written so that NaN fails too; a fractional count is not an integer either.
           if (!(n >= (indices ? 3 : 0) && n <= (1 << 20)) || n != std::floor(n))
             fail(e.name + " " + std::to_string(i) + " has a list of " + number(n) +
@@ -380,6 +393,39 @@ class PlyReader {
     long count = 0;
     std::vector<Property> props;
   };
+
+  // Triangle strips (a `tristrips` element, as PLY's original tools write them): a list of n vertex
+  // indices, -1 ending a strip; each run of three makes a triangle, every other one turned to keep the
+  // strip's orientation. Triangles that repeat a vertex join strips and are left out.
+  void read_strips(double n, const std::string& type, long item, int item_line, FileContents& soup) {
+    if (!(n >= 0 && n <= (1 << 24)) || n != std::floor(n))
+      fail("tristrips " + std::to_string(item) + " has a list of " + number(n) +
+           " items (a whole number, at most 2^24)");
+    std::vector<int> strip;
+    const auto flush = [&] {
+      for (size_t k = 2; k < strip.size(); ++k) {
+        int a = strip[k - 2], b = strip[k - 1];
+        const int c = strip[k];
+        if (k % 2 == 1) std::swap(a, b);
+        if (a == b || b == c || a == c) continue;
+        soup.corners.insert(soup.corners.end(), {a, b, c});
+        soup.offsets.push_back(static_cast<int>(soup.corners.size()));
+        soup.lines.push_back(binary_ ? 0 : item_line);
+      }
+      strip.clear();
+    };
+    for (long j = 0; j < static_cast<long>(n); ++j) {
+      const double idx = value(type);
+      if (idx != std::floor(idx) || idx < -1 || idx > 2147483647.0)
+        fail("tristrips " + std::to_string(item) + " has vertex index " + number(idx) +
+             ", not -1 or an index");
+      if (idx < 0)
+        flush();
+      else
+        strip.push_back(static_cast<int>(idx));
+    }
+    flush();
+  }
 
   [[noreturn]] void fail(const std::string& what) const {
     const bool has_lines = !binary_ || in_header_;
@@ -464,6 +510,16 @@ class PlyReader {
               }))
             fail("the face element has no list property 'vertex_indices' (or 'vertex_index')");
         }
+        // Corners listed by another element (not face or tristrips) would be dropped without a word.
+        for (const Element& e : elements_)
+          if (e.name != "face" && e.name != "tristrips" && e.count > 0 &&
+              std::any_of(e.props.begin(), e.props.end(), [](const Property& prop) {
+                return !prop.list_count_type.empty() &&
+                       (prop.name == "vertex_indices" || prop.name == "vertex_index");
+              }))
+            fail("element '" + printable(e.name.substr(0, 40)) +
+                 "' lists vertex indices, which msdeform reads only "
+                 "from a 'face' element (polygons) or a 'tristrips' element (triangle strips)");
         // A vertex element must have x, y and z (other spellings, e.g. X Y Z, would read as zeros).
         for (const Element& e : elements_) {
           if (e.name != "vertex" || e.count == 0) continue;
@@ -1089,6 +1145,14 @@ void save_mesh(const Positions& P, const Faces& F, const std::string& path, cons
       throw InvalidInput("save_mesh: " + path +
                          ": STL stores triangles only and there are none (a point cloud): "
                          "use .ply, .off or .obj; nothing written");
+    // Binary STL holds single precision: a coordinate beyond its range would be written as inf.
+    for (long i = 0; i < nv; ++i)
+      if (!(P.row(i).cwiseAbs().maxCoeff() <= std::numeric_limits<float>::max()))
+        throw InvalidInput(
+            "save_mesh: " + path + ": vertex " + std::to_string(i) + " has a coordinate of " +
+            format_number(P.row(i).cwiseAbs().maxCoeff()) +
+            ", beyond the single precision STL stores (3.4e38): use .ply, .off or .obj; nothing "
+            "written");
     out.assign(80, '\0');
     std::memcpy(out.data(), "msdeform binary STL", 19);
     const std::uint32_t count = static_cast<std::uint32_t>(nf);

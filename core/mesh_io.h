@@ -22,7 +22,8 @@ struct LoadReport {
   //! than its header declares), or 0.
   int first_ignored_line = 0;
   //! OFF: the first vertex or face line with numbers after its coordinates or indices (a COFF's colours,
-  //! an NOFF's normals): read past and not kept; 0 if none.
+  //! an NOFF's normals); OBJ: the first texture coordinate, normal or material line (vt, vn, usemtl,
+  //! mtllib). Read past and not kept (a written result holds positions and triangles); 0 if none.
   int first_attribute_line = 0;
 };
 

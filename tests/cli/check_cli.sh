@@ -230,6 +230,12 @@ PY
 printf 'OFF\n4 2 0\n0 0 0\n1e200 0 0\n0 1e200 0\n1e200 1e200 0\n3 0 1 2\n3 1 3 2\n' > huge.off
 "$msdeform" info huge.off > out.txt 2>&1 || fail "info on coordinates of 1e200"
 grep -q "sizes  *coordinates too large" out.txt || fail "info does not name the sizes beyond 1e70"
+# An OBJ's texture coordinates and normals are read past; the written result says it does not keep them.
+printf 'mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\nf 2/1/1 4/1/1 3/1/1\n' > uv.obj
+"$msdeform" deform uv.obj --handle vertex:3,0 --translate 0,0,0.1 --method rbf -o uv-out.obj >out.txt 2>&1 ||
+  { cat out.txt; fail "deform of an OBJ with texture coordinates"; }
+grep -q "uv.obj line 1: its colours, normals, texture coordinates or materials are not kept" out.txt ||
+  { cat out.txt; fail "no warning that the OBJ's attributes are lost"; }
 "$msdeform" deform split.off --sel split.sel --def lift.def --method shell -o apart.off >/dev/null 2>err.txt ||
   fail "deform of the split plane"
 grep -q "split along seams" err.txt || fail "no seam warning"

@@ -67,6 +67,50 @@ TEST_CASE("binary little-endian PLY loads in double precision, extra properties 
   CHECK_THROWS_WITH(load_mesh(tmp.file("cut.ply")), Contains("ends inside the binary data"));
 }
 
+TEST_CASE("PLY triangle strips load as triangles; other elements listing corners are refused", "[core][io]") {
+  // A tristrips element loaded as a point cloud without a word, and a space method wrote it back faceless.
+  test::TempDir tmp;
+  const std::string vertices = "element vertex 5\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string points = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n";
+  const std::string ascii = "ply\nformat ascii 1.0\n" + vertices +
+                            "element tristrips 1\nproperty list int int vertex_indices\nend_header\n" +
+                            points + "8 0 1 3 2 -1 1 4 2\n";  // two strips: the square, then one triangle
+  const TriangleSoup a = load_soup(tmp.write("strips.ply", ascii));
+  REQUIRE(a.F.rows() == 3);
+  CHECK(a.F.row(0) == Eigen::RowVector3i(0, 1, 3));
+  CHECK(a.F.row(1) == Eigen::RowVector3i(3, 1, 2));  // every other one turned: both face +z
+  CHECK(a.F.row(2) == Eigen::RowVector3i(1, 4, 2));
+  std::string binary = "ply\nformat binary_little_endian 1.0\n" + vertices +
+                       "element tristrips 1\nproperty list uchar int vertex_indices\nend_header\n";
+  for (const float p : {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 2, 0, 0})
+    binary.append(reinterpret_cast<const char*>(&p), 4);
+  binary.push_back(7);
+  for (const int i : {0, 1, 3, 2, -1, 1, 4}) binary.append(reinterpret_cast<const char*>(&i), 4);
+  const TriangleSoup b = load_soup(tmp.write("strips-b.ply", binary));
+  CHECK(b.F.rows() == 2);  // the second strip, 1 4, is too short for a triangle
+  CHECK_THROWS_WITH(
+      load_soup(tmp.write("lines.ply", "ply\nformat ascii 1.0\n" + vertices +
+                                           "element polyline 1\nproperty list int int vertex_indices\n"
+                                           "end_header\n" +
+                                           points + "3 0 1 2\n")),
+      Contains("element 'polyline' lists vertex indices, which msdeform reads only from a 'face' element"));
+}
+
+TEST_CASE("STL refuses coordinates beyond single precision instead of writing inf", "[core][io][bad-input]") {
+  // 1e39 lies within msdeform's sizes (up to 1e70) but not within float's: the file held inf, exit 0,
+  // and msdeform's own reader refused it.
+  test::TempDir tmp;
+  Positions P(3, 3);
+  P << 0, 0, 0, 1e39, 0, 0, 0, 1, 0;
+  const Faces F = (Faces(1, 3) << 0, 1, 2).finished();
+  CHECK_THROWS_WITH(save_mesh(P, F, tmp.file("big.stl")),
+                    Contains("vertex 1 has a coordinate of 1e+39, beyond the single precision STL stores"));
+  CHECK_FALSE(std::filesystem::exists(tmp.file("big.stl")));
+  P(1, 0) = 3e38;
+  save_mesh(P, F, tmp.file("ok.stl"));
+  CHECK(load_soup(tmp.file("ok.stl")).P.allFinite());
+}
+
 TEST_CASE("real meshes load with the right counts", "[core][io][real]") {
   struct Case {
     std::string path;

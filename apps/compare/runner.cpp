@@ -99,7 +99,10 @@ std::vector<MethodResult> compare_methods(const EditCase& edit, const Comparison
         settings.decomposition.control = edit.control;
       if (!settings.decomposition.low_pass_cache) settings.decomposition.low_pass_cache = low_pass_cache;
       auto deformer = builtin_methods().make(method, settings);
-      if (deformer->traits().domain == DeformerDomain::Surface) require_surface(edit, method);
+      if (deformer->traits().domain == DeformerDomain::Surface && !edit.surface_problem.empty()) {
+        r.refused_input = true;
+        require_surface(edit, method);  // throws, saying why
+      }
       auto t0 = Clock::now();
       deformer->prepare(edit.P, edit.F, edit.region);
       r.prepare_ms = ms_since(t0);

@@ -20,6 +20,9 @@ struct MethodResult {
   int vertices = 0;
   bool ok = false;
   std::string error;  //!< why the method failed (ok = false)
+  //! ok = false because the method does not take this kind of input (a surface method on a point cloud or a
+  //! non-manifold soup): a refusal the input asks for, not a failure of the run
+  bool refused_input = false;
   //! prepare(); a frame: linear methods the median of the timed frames after a warm-up, iterative
   //! methods their one frame from rest.
   double prepare_ms = 0, frame_ms = 0;

@@ -204,10 +204,15 @@ std::string verdict_summary(const std::vector<MethodResult>& results, const std:
     s << "\n";
     for (Verdict v :
          {Verdict::Good, Verdict::Fair, Verdict::Poor, Verdict::Broken, Verdict::NotJudged, Verdict::Failed}) {
-      std::string names;
+      std::string names, refused;
       for (size_t i : ids)
-        if (assessments[i].verdict == v) names += (names.empty() ? "" : ", ") + results[i].method;
+        if (assessments[i].verdict == v) {
+          std::string& list = results[i].refused_input ? refused : names;
+          list += (list.empty() ? "" : ", ") + results[i].method;
+        }
       if (!names.empty()) s << "  " << to_string(v) << ": " << names << "\n";
+      if (!refused.empty())
+        s << "  not run (surface methods; the input is not a surface): " << refused << "\n";
     }
   }
   return s.str();

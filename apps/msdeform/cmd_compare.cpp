@@ -607,12 +607,21 @@ void add_compare_command(CLI::App& app) {
     write_file_atomically((out / "index.html").string(), index_html(all, assessments, scene_outputs, options.methods,
                                                                     options.reference, a->method.settings.base_method));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    int failed = 0;
-    for (const auto& r : all) failed += !r.ok;
+    int failed = 0, refused = 0;
+    for (const auto& r : all) (r.refused_input ? refused : failed) += !r.ok;
     std::printf("%s", verdict_summary(all, assessments).c_str());  // the whole table is in metrics.md
     if (!a->mesh.mesh.empty()) a->mesh.write_built(cases[mesh_case].region, cases[mesh_case].transforms);
-    std::printf("\nwrote %s/index.html (%zu results, %d failed) in %.1f s\n", a->output.c_str(), all.size(), failed, seconds);
-    if (failed > 0)  // the pages are written, but the exit status says not everything ran
+    std::printf(
+        "\nwrote %s/index.html (%zu results, %d failed%s) in %.1f s\n", a->output.c_str(), all.size(), failed,
+        refused > 0
+            ? (", " + std::to_string(refused) + (refused == 1 ? " surface method" : " surface methods") +
+               " not run: the input is not a surface")
+                  .c_str()
+            : "",
+        seconds);
+    // The pages are written, but the exit status says not everything ran (surface methods refusing a point
+    // cloud or a soup are what the input asks for: they do not fail the comparison).
+    if (failed > 0)
       throw Error("compare: " + std::to_string(failed) + " of " + std::to_string(all.size()) +
                   " runs failed (their rows in metrics.md and their pictures say why)");
   });

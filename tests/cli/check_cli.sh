@@ -174,11 +174,17 @@ expect_error 2 "'inf' must be a finite length >= 0" "$msdeform" render --scene l
 [ "$(wc -c <err.txt)" -lt 300 ] || { cat err.txt; fail "the --detail-scale message is too long"; }
 
 # compare: a run that fails makes the exit status non-zero (the pages are still written).
+expect_error 1 "1 of 2 runs failed" "$msdeform" compare --mesh lift.off --sel lift.sel --def lift.def \
+  --methods shell,multiscale-normal --detail-scale 1e9 -o cmp
+[ -s cmp/index.html ] || fail "compare wrote no index.html"
+# Surface methods on a point cloud are not run, as the input asks: not a failure (exit 1 before).
 printf 'OFF\n4 0 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n' >cloud.off
 printf '0\n1\n1\n2\n' >cloud.sel
 printf '1 0 0 0\n0 1 0 0\n0 0 1 0.1\n0 0 0 1\n' >cloud.def
-expect_error 1 "runs failed" "$msdeform" compare --mesh cloud.off --sel cloud.sel --def cloud.def --methods shell,rbf -o cmp
-[ -s cmp/index.html ] || fail "compare wrote no index.html"
+"$msdeform" compare --mesh cloud.off --sel cloud.sel --def cloud.def --methods shell,rbf -o cmp-cloud >out.txt 2>&1 ||
+  { cat out.txt; fail "compare on a point cloud"; }
+grep -q "not run (surface methods; the input is not a surface): shell" out.txt || { cat out.txt; fail "compare: shell on a cloud"; }
+grep -q "(2 results, 0 failed, 1 surface method not run" out.txt || { cat out.txt; fail "compare: cloud summary"; }
 # render needs a surface for self-intersections, and does not take a --method.
 expect_error 1 "render --color selfint needs a surface" "$msdeform" render cloud.off --color selfint -o c.png
 grep -q -- "--method" err.txt && { cat err.txt; fail "render advised a --method"; }

@@ -11,12 +11,15 @@ namespace msd {
 LatticeDeformer::LatticeDeformer(LatticeOptions options) : options_(options) {
   const auto count = [](int c) { return std::to_string(c); };
   const Eigen::Vector3i& c = options_.cells;
-  if ((c.array() < 0).any() || (c.array() > LatticeOptions::kMaxCells).any())
+  // A count of 0 beside others (0, 2, 2) was refused later as "give all three cell counts or none".
+  if ((c.array() < 0).any() || (c.array() > LatticeOptions::kMaxCells).any() || (c.any() && !c.all()))
     throw InvalidInput("lattice: cell counts must be in 1.." + count(LatticeOptions::kMaxCells) +
                        " (or all 0 to fit them), got (" + count(c.x()) + ", " + count(c.y()) + ", " + count(c.z()) + ")");
   if (options_.cells_longest < 1 || options_.cells_longest > LatticeOptions::kMaxCells)
-    throw InvalidInput("lattice: cells_longest must be in 1.." + count(LatticeOptions::kMaxCells) + ", got " +
-                       count(options_.cells_longest));
+    throw InvalidInput(
+        "lattice: the cell count along the box's longest side (cells_longest; Python: cells=N, "
+        "--lattice-cells) must be in 1.." +
+        count(LatticeOptions::kMaxCells) + ", got " + count(options_.cells_longest));
   if (!(options_.margin >= 0 && options_.margin <= LatticeOptions::kMaxMargin))
     throw InvalidInput("lattice: the margin must be in 0..10 (relative to the bounding-box diagonal), got " +
                        std::to_string(options_.margin));
@@ -29,10 +32,9 @@ void LatticeDeformer::fit_basis(const Positions& P, const Region&) {
   // At least a small extent along every axis, so a flat or straight input still gets a 3D lattice.
   const Vec3 size = ((hi - lo).array() + 2 * std::max(options_.margin, 1e-3) * diag).matrix();
   lo_ = lo - 0.5 * (size - (hi - lo));
-  if ((options_.cells.array() > 0).all()) {
+  if (options_.cells.all()) {  // all positive (the constructor's check)
     cells_ = options_.cells;
   } else {
-    if ((options_.cells.array() != 0).any()) throw InvalidInput("lattice: give all three cell counts or none");
     const double cell = size.maxCoeff() / options_.cells_longest;
     for (int a = 0; a < 3; ++a) cells_[a] = std::max(1, static_cast<int>(std::lround(size[a] / cell)));
   }

@@ -206,8 +206,11 @@ def test_unknown_method_and_options_are_refused_by_name():
     with pytest.raises(msdeform.InvalidInput):  # the library's own check of the value
         msdeform.Deformer("arap", iterations=0)
     # Sizes that would exhaust memory are refused by the library, for Python as for the command line.
-    with pytest.raises(msdeform.InvalidInput, match=r"cells_longest must be in 1\.\.64, got 3000"):
+    with pytest.raises(msdeform.InvalidInput, match=r"Python: cells=N, --lattice-cells\) must be in 1\.\.64, got 3000"):
         msdeform.Deformer("lattice", cells=3000)
+    # A 0 beside other counts named the problem as "give all three cell counts or none".
+    with pytest.raises(msdeform.InvalidInput, match=r"cell counts must be in 1\.\.64 \(or all 0 to fit them\), got \(0, 2, 2\)"):
+        msdeform.Deformer("lattice", cells=(0, 2, 2))
     with pytest.raises(msdeform.InvalidInput, match=r"cell counts must be in 1\.\.64"):
         msdeform.Deformer("lattice", cells=(4, 1000, 4))
     with pytest.raises(msdeform.InvalidInput, match=r"max_centres must be in 1\.\.20000"):

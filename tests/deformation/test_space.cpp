@@ -140,7 +140,9 @@ TEST_CASE("lattice, rbf: sizes that would exhaust memory are refused when the me
   LatticeOptions lattice;
   lattice.cells_longest = 3000;
   CHECK_THROWS_AS(LatticeDeformer(lattice), InvalidInput);
-  CHECK_THROWS_WITH(LatticeDeformer(lattice), Catch::Matchers::Contains("cells_longest must be in 1..64"));
+  CHECK_THROWS_WITH(
+      LatticeDeformer(lattice),
+      Catch::Matchers::Contains("(cells_longest; Python: cells=N, --lattice-cells) must be in 1..64"));
   lattice.cells_longest = 64;
   CHECK_NOTHROW(LatticeDeformer(lattice));
   lattice.cells = {4, 1000, 4};

@@ -252,6 +252,19 @@ std::vector<Mat4> read_def(const std::string& path) {
   if (values.empty() || values.size() % 16 != 0)
     throw InvalidInput("read_def: " + path + " has " + std::to_string(values.size()) +
                        " numbers; expected one 4x4 matrix (16 numbers, row by row) per handle");
+  // Rows of 4 numbers per line, or a whole matrix on one line: a row split over lines (3 then 5 numbers)
+  // says the file is not what its writer meant.
+  for (size_t i = 0; i < values.size();) {
+    const int line = values[i].second;
+    size_t n = 0;
+    while (i + n < values.size() && values[i + n].second == line) ++n;
+    if (!((n == 4 && i % 4 == 0) || (n == 16 && i % 16 == 0)))
+      throw InvalidInput("read_def: " + path + " line " + std::to_string(line) + ": " + std::to_string(n) +
+                         (n == 1 ? " number" : " numbers") + " starting at entry " + std::to_string(i % 16) +
+                         " of matrix " + std::to_string(i / 16) +
+                         "; a .def holds each matrix row by row, 4 numbers per line (or 16 on one line)");
+    i += n;
+  }
   std::vector<Mat4> out(values.size() / 16);
   for (size_t h = 0; h < out.size(); ++h) {
     for (int k = 0; k < 16; ++k) {

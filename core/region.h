@@ -77,9 +77,10 @@ void write_sel(const Region& region, const std::string& path);
 //! g >= 0 handle g. \throw InvalidInput on a wrong header, count or value.
 Region read_dmat_groups(const std::string& path, int num_vertices);
 
-//! Reads a .def file: one 4x4 affine matrix per handle, 16 numbers each, row by row; '#' comments.
-//! \throw InvalidInput if the count is not a multiple of 16, a number is malformed or non-finite, or a
-//! last row is not (0 0 0 1).
+//! Reads a .def file: one 4x4 affine matrix per handle, 16 numbers each, row by row (4 numbers per line, or
+//! a whole matrix on one line); '#' comments. \throw InvalidInput if the count is not a multiple of 16, a
+//! line holds another count (a row split over lines), a number is malformed or non-finite, or a last row
+//! is not (0 0 0 1).
 std::vector<Mat4> read_def(const std::string& path);
 //! Writes transforms as a .def file (atomically). \throw InvalidInput for what read_def refuses (a
 //! non-finite entry, a last row other than 0 0 0 1), before anything is written.

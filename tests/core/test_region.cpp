@@ -92,6 +92,11 @@ TEST_CASE("bad selection and transform files give specific errors", "[core][regi
   CHECK_THROWS_WITH(read_def(write("bad.def", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0\n")),
                     Contains("15 numbers") && Contains("4x4"));
   CHECK_THROWS_WITH(read_def(write("proj.def", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n")), Contains("not affine"));
+  // A row split over lines (3 numbers, then 5) was read as if the line breaks were not there.
+  CHECK_THROWS_WITH(
+      read_def(write("split.def", "1 0 0\n0 0 1 0 0\n0 0 1 0\n0 0 0 1\n")),
+      Contains("line 1: 3 numbers starting at entry 0 of matrix 0") && Contains("4 numbers per line"));
+  CHECK(read_def(write("one-line.def", "1 0 0 0.5 0 1 0 0 0 0 1 0 0 0 0 1\n"))[0](0, 3) == 0.5);
   CHECK_THROWS_WITH(read_def(write("nan.def", "1 0 0 0\n0 nan 0 0\n0 0 1 0\n0 0 0 1\n")), Contains("line 2"));
   CHECK_THROWS_WITH(read_dmat_groups(write("two.dmat", "2 3\n0 0 0 1 1 1\n"), 3), Contains("one column"));
   // A selection with far more labels than vertices stops at the first one too many (it read them all).

@@ -181,7 +181,12 @@ void FoldCheck::prepare(const Positions& S, const Faces& Fs, const Positions& B,
       const Vec3 centroid = (S.row(Fs(f, 0)) + S.row(Fs(f, 1)) + S.row(Fs(f, 2))) / 3;
       r = reference_[f] = query->query(centroid).face;
     }
-    rest_sign_[f] = static_cast<signed char>(orientation(s, &Fs(f, 0), b, &Fb(r, 0)));
+    // A needle of S (a corner's |cot| beyond the cotan Laplacian's clamp, 1e5: a sliver some 1e-5 of its
+    // length high or less) turns over at the slightest move of a corner; the input's own needles are not
+    // folds of the detail layer (prepare warns about them), and a smaller detail scale cannot help there.
+    const bool needle =
+        triangle_cotangents(S.row(Fs(f, 0)), S.row(Fs(f, 1)), S.row(Fs(f, 2))).needle_corners > 0;
+    rest_sign_[f] = needle ? 0 : static_cast<signed char>(orientation(s, &Fs(f, 0), b, &Fb(r, 0)));
     near_perpendicular_[f] = std::abs(normal_cosine(s, &Fs(f, 0), b, &Fb(r, 0))) < kNearPerpendicular;
   }
   order_.resize(Fs.rows());

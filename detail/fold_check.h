@@ -17,8 +17,9 @@ class FoldCheck {
   //! S: #Vs by 3 with faces Fs; B: #Vb by 3 with faces Fb. With identical connectivity triangle t of S is
   //! compared with triangle t of B; otherwise with the base triangle closest to its centroid (Embree).
   //! Triangles of S or B of zero area at rest (below 1e-14 of their squared longest edge, as in
-  //! cotan_laplacian: their orientation is rounding noise) are not counted. \throw InvalidInput for an index
-  //! out of range.
+  //! cotan_laplacian: their orientation is rounding noise) are not counted, nor needles of S (a corner's
+  //! |cot| above 1e5, as cotan_laplacian clamps them: they turn over at the slightest move of a corner).
+  //! \throw InvalidInput for an index out of range.
   void prepare(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb);
   //! Lets count() skip the triangles the edit moves rigidly with their base. `s_region` (#Vs codes) and
   //! `b_region` (#Vb codes) say where the edit places each vertex of S' and B' itself: a triangle of S whose

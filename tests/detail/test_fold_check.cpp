@@ -81,6 +81,29 @@ TEST_CASE("fold check: a zero-area triangle at rest is not counted, a real turn 
   CHECK(folds.count(moved, B) == 1);
 }
 
+TEST_CASE("fold check: a needle of S turning over is not a fold of the details", "[detail][fold]") {
+  // Triangle 0 of S is a needle 1e-8 of its length high (beyond the 1e-14 area rule, within the cotan
+  // clamp's 1e5): at the origin its flip counted as a fold with the advice to lower the detail scale, and
+  // the same mesh moved 1e6 away counted none.
+  Positions S(4, 3);
+  S << 0, 0, 0, 1, 0, 0, 0.5, 1e-8, 0, 0.5, -0.5, 0;
+  Faces F(2, 3);
+  F << 0, 1, 2, 1, 0, 3;
+  for (const double offset : {0.0, 1e6}) {
+    Positions P = S, B = S;
+    P.rowwise() += Eigen::RowVector3d(offset, 0.5 * offset, -offset);
+    B.rowwise() += Eigen::RowVector3d(offset, 0.5 * offset, -offset);
+    B.row(2) = P.row(2) + Eigen::RowVector3d(0, 0.2, 0);  // a sound base triangle under the needle
+    FoldCheck folds;
+    folds.prepare(P, F, B, F);
+    Positions moved = P;
+    moved(2, 1) -= 2e-8;  // the needle turns over
+    CHECK(folds.count(moved, B) == 0);
+    moved(3, 1) += 1;  // triangle 1 turns over its base
+    CHECK(folds.count(moved, B) == 1);
+  }
+}
+
 TEST_CASE("fold check: right at any finite size (products of normals beyond 1e+-308)", "[detail][fold]") {
   SceneOptions o;
   o.resolution = 2000;

@@ -151,6 +151,7 @@ void add_deform_command(CLI::App& app) {
     t0 = Clock::now();
     run([&] { deformer->deform(c.transforms, out); });
     const double frame_ms = ms_since(t0);
+    printer->flush();  // the frame's last progress line (ARAP's last iteration) before its warnings
     if (c.weld)
       save_mesh(c.weld->unweld(out), c.file_F, *output);  // the file's vertices and faces
     else

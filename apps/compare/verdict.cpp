@@ -68,8 +68,26 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
     if (std::find(scenes.begin(), scenes.end(), r.scene) == scenes.end()) scenes.push_back(r.scene);
   for (const std::string& scene : scenes) {
     const std::vector<size_t> ids = of_scene(results, scene);
-    // Why a result lost the shape (empty: it did not): self-intersections, folds, a blown-up rigidity or
-    // volume.
+    // Self-intersections and folds break a result outright. It also lost the shape where its rigidity or
+    // its volume is both far off in absolute terms and far worse than the edit's best result that did not
+    // tear: an edit may ask for any stretch (a handle pulled 4 times its distance from the fixed part, a
+    // scaled handle), and then every method stretches alike.
+    const auto torn = [](const MethodResult& r) { return r.self_intersections > 0 || r.folded_faces > 0; };
+    const auto volume_factor =
+        [](const MethodResult& r) {  // V'/V as a factor >= 1 either way (1: not judged)
+          if (!r.volume_change || r.scaling.mirrors) return 1.0;
+          const double ratio = 1 + *r.volume_change;
+          return ratio > 0 ? std::max(ratio, 1 / ratio) : INFINITY;
+        };
+    double least_rigidity = INFINITY, least_volume = INFINITY;
+    for (size_t i : ids) {
+      const MethodResult& r = results[i];
+      if (!r.ok || torn(r)) continue;
+      if (r.rigidity.count > 0)
+        least_rigidity = std::min(least_rigidity, std::max(r.rigidity.mean, t.rigid_floor));
+      least_volume = std::min(least_volume, volume_factor(r));
+    }
+    // Why a result is broken (empty: it is not).
     auto lost_shape = [&](const MethodResult& r) {
       std::string why;
       const auto add = [&](const std::string& text) { why += (why.empty() ? "" : "; ") + text; };
@@ -81,15 +99,13 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
       if (r.folded_faces > 0)
         add(std::to_string(r.folded_faces) + (r.folded_faces == 1 ? " triangle" : " triangles") +
             " folded over the base");
-      const double grown = 2 * r.scaling.growth - 1;
-      if (r.rigidity.count > 0 && r.rigidity.mean > t.broken_rigidity * grown * grown)
-        add("rigidity " + fmt("%.3g", r.rigidity.mean) + ", as if every one-ring had grown " +
-            fmt("%.2g", 1 + std::sqrt(r.rigidity.mean)) + " times (the shape is lost)");
-      if (r.volume_change && !r.scaling.mirrors) {
-        const double ratio = 1 + *r.volume_change;
-        if (ratio > t.broken_volume * r.scaling.volume_high || ratio * t.broken_volume < r.scaling.volume_low)
-          add("volume changed by " + fmt("%+.3g", 100 * *r.volume_change) + " % (the shape is lost)");
-      }
+      if (r.rigidity.count > 0 && r.rigidity.mean > t.broken_rigidity &&
+          r.rigidity.mean > t.broken_rigidity_ratio * least_rigidity)
+        add("rigidity " + fmt("%.3g", r.rigidity.mean) + ", " +
+            fmt("%.0f", r.rigidity.mean / least_rigidity) +
+            "× the edit's most rigid result (the shape is lost)");
+      if (const double f = volume_factor(r); f > t.broken_volume && f > t.broken_volume * least_volume)
+        add("volume changed by " + fmt("%+.3g", 100 * *r.volume_change) + " % (the shape is lost)");
       return why;
     };
     auto broken = [&](const MethodResult& r) { return !lost_shape(r).empty(); };
@@ -198,9 +214,14 @@ std::string verdict_summary(const std::vector<MethodResult>& results, const std:
       }
     const bool any_unjudged = std::any_of(ids.begin(), ids.end(),
                                           [&](size_t i) { return assessments[i].verdict == Verdict::NotJudged; });
+    const bool none_ran =
+        std::all_of(ids.begin(), ids.end(), [&](size_t i) { return results[i].refused_input; });
     if (!any_best)
-      s << (any_unjudged ? " no result could be judged (see not-judged below: no quality measure for this input)"
-                         : " no usable result (every method failed or broke)");
+      s << (none_ran ? " no method could run: the input is not a surface (space methods take it: lattice, "
+                       "cage-mvc, cage-harmonic, rbf)"
+            : any_unjudged
+                ? " no result could be judged (see not-judged below: no quality measure for this input)"
+                : " no usable result (every method failed or broke)");
     s << "\n";
     for (Verdict v :
          {Verdict::Good, Verdict::Fair, Verdict::Poor, Verdict::Broken, Verdict::NotJudged, Verdict::Failed}) {

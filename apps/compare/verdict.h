@@ -26,12 +26,13 @@ struct VerdictThresholds {
   //! without scaling, |V'/V − 1|): beyond these, fair and poor. On the survey cylinder's 120° bend ARAP loses
   //! 13 %, the shell 51 %; `msdeform deform` warns beyond the poor one (shape_change_warning()).
   double fair_volume = 0.15, poor_volume = 0.30;
-  //! Beyond these the shape is lost, not only worse: broken like a self-intersection. Rigidity: a mean over
-  //! the mesh above broken_rigidity · (2g − 1)², g the growth the handles ask (EditScaling), as if every
-  //! one-ring had grown to twice what the handles ask (a uniform scale by s reads (s − 1)²); Laplacian
-  //! editing ballooned the survey cactus to 5.98 and ×31 its volume, the other methods there stay below 1.3.
-  //! Volume (closed meshes): V'/V above broken_volume times the range asked, or below it by that factor.
-  double broken_rigidity = 1, broken_volume = 3;
+  //! A result that did not tear lost the shape, and is broken, when its rigidity mean is above
+  //! broken_rigidity (as a uniform scale by 2 reads) and above broken_rigidity_ratio times the edit's most
+  //! rigid result that did not tear, or its volume factor (V'/V or V/V', closed meshes) above broken_volume
+  //! and above broken_volume times the edit's smallest: Laplacian editing ballooned the survey cactus to
+  //! 31 times its volume (rigidity 5.98; the others below 1.3), while a handle pulled to 4 times its
+  //! distance from the fixed part stretches every method's result alike (ARAP 6.5, volume ×4.3).
+  double broken_rigidity = 1, broken_rigidity_ratio = 10, broken_volume = 3;
 };
 
 struct Assessment {

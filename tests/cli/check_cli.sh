@@ -185,6 +185,8 @@ printf '1 0 0 0\n0 1 0 0\n0 0 1 0.1\n0 0 0 1\n' >cloud.def
   { cat out.txt; fail "compare on a point cloud"; }
 grep -q "not run (surface methods; the input is not a surface): shell" out.txt || { cat out.txt; fail "compare: shell on a cloud"; }
 grep -q "(2 results, 0 failed, 1 surface method not run" out.txt || { cat out.txt; fail "compare: cloud summary"; }
+expect_error 1 "compare: no method ran: the input is not a surface" \
+  "$msdeform" compare --mesh cloud.off --sel cloud.sel --def cloud.def --methods shell,arap -o cmp-cloud2
 # render needs a surface for self-intersections, and does not take a --method.
 expect_error 1 "render --color selfint needs a surface" "$msdeform" render cloud.off --color selfint -o c.png
 grep -q -- "--method" err.txt && { cat err.txt; fail "render advised a --method"; }

@@ -146,7 +146,12 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
                          : ratio <= 1 ? "the " + (intersections_counted ? most_rigid : "most rigid result")
                                   : "rigid (" + fmt("%.2g", ratio) + "× the " + most_rigid + ")");
       }
-      if (r.distortion.count > 0) {
+      // Heights are measured against the rest's: under handles that scale, the details scale with the shape
+      // as asked, and every result read "poor" (details changed by 650–910 % under a cylinder scaled by 3).
+      const bool scaled =
+          r.scaling.growth > 1 + t.scale_tolerance || r.scaling.shrink > 1 + t.scale_tolerance;
+      const bool judge_details = r.distortion.count > 0 && !scaled;
+      if (judge_details) {
         const double d = r.distortion.mean;
         const std::string text = "details changed by " + fmt("%.2g", 100 * d) + " % of their height";
         if (d > t.poor_distortion) poor.push_back(text);
@@ -163,7 +168,7 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         else if (v > t.fair_volume)
           fair.push_back(text);
       }
-      if (r.rigidity.count == 0 && r.distortion.count == 0) {
+      if (r.rigidity.count == 0 && !judge_details) {
         a.verdict = Verdict::NotJudged;
         a.reason = "no rigidity or detail measure for this input" +
                    (r.not_measured.empty() ? std::string() : " (" + shortened(r.not_measured) + ")");
@@ -174,6 +179,8 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         if ((!r.warning.empty() || !intersections_counted) && a.verdict == Verdict::Good) a.verdict = Verdict::Fair;
         if (!intersections_counted) a.reason += "; self-intersections not counted";
       }
+      if (r.distortion.count > 0 && !judge_details)
+        a.reason += "; detail change not judged (the handles scale the shape, and its details with it)";
       if (!r.warning.empty()) a.reason += "; warning: " + shortened(r.warning);
     }
     // Best: the most rigid unbroken result of the best verdict present, then the least distortion.

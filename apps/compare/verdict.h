@@ -22,6 +22,9 @@ struct VerdictThresholds {
   //! motion reads 1e-31 to 1e-22 from rounding): ratios are taken against at least this.
   double rigid_floor = 1e-6;
   double fair_distortion = 0.10, poor_distortion = 0.25;  //!< of the largest detail height
+  //! Handles that scale by more than this (EditScaling's growth or shrink above 1 + it) scale the details
+  //! with the shape: their heights, measured against the rest's, are then not judged.
+  double scale_tolerance = 1e-3;
   //! Relative volume change of a closed mesh beyond what the handles ask (EditScaling::volume_excess();
   //! without scaling, |V'/V − 1|): beyond these, fair and poor. On the survey cylinder's 120° bend ARAP loses
   //! 13 %, the shell 51 %; `msdeform deform` warns beyond the poor one (shape_change_warning()).

@@ -254,3 +254,18 @@ TEST_CASE("compare: a result is broken by the intersections its edit added, not 
   CHECK(results[0].self_intersections == 0);
   CHECK(assess(results)[0].verdict != Verdict::Broken);
 }
+
+TEST_CASE("verdicts: under handles that scale, the detail heights are not judged against the rest's",
+          "[compare][verdict]") {
+  // The survey cylinder with a handle scaled by 3: every result read "poor: details changed by 650–910 %".
+  std::vector<MethodResult> results = {result("scaled", "arap", 0.01, 9.1),
+                                       result("scaled", "shell", 0.015, 6.5)};
+  for (MethodResult& r : results) r.scaling = edit_scaling({Mat4(Eigen::Vector4d(3, 3, 3, 1).asDiagonal())});
+  const std::vector<Assessment> a = assess(results);
+  CHECK(a[0].verdict == Verdict::Good);
+  CHECK(a[1].verdict == Verdict::Good);
+  CHECK_THAT(a[0].reason, Contains("detail change not judged (the handles scale the shape"));
+  CHECK_THAT(a[0].reason, !Contains("details changed"));
+  for (MethodResult& r : results) r.scaling = {};
+  CHECK(assess(results)[0].verdict == Verdict::Poor);
+}

@@ -39,8 +39,24 @@ void add_common_checks(CLI::App& app) {
         return {};
       },
       "", "resolution");
+  // Integers are decimal too: CLI11 reads 010 as octal 8 and 0x10 as 16, and calls 08 or 2.5 "not in range".
+  // Written without leading zeros (which CLI11 would read as octal) before the ranges check them.
+  const CLI::Validator decimal_integer(
+      [](std::string& text) -> std::string {
+        const size_t digits = text.find_first_not_of("+-") == 1 ? 1 : 0;
+        if (text.size() == digits || text.find_first_not_of("0123456789", digits) != std::string::npos)
+          return "'" + text + "' is not a whole decimal number";
+        const size_t first = std::min(text.find_first_not_of('0', digits), text.size() - 1);
+        text = text.substr(0, digits) + text.substr(first);
+        return {};
+      },
+      "", "decimal integer");
   for (CLI::Option* option : app.get_options()) {
-    if (option->get_type_name().find("FLOAT") != std::string::npos) option->check(finite);
+    const std::string type = option->get_type_name();
+    if (type.find("FLOAT") != std::string::npos)
+      option->check(finite);
+    else if (type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0)
+      option->transform(decimal_integer);
     if (option->get_name() == "--resolution") option->check(resolution);
   }
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) add_common_checks(*sub);

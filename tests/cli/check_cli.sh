@@ -169,6 +169,13 @@ grep -q "building scene" err.txt && fail "compare built scenes before refusing -
 # A resolution is decimal (0x10 was read as hexadecimal 16).
 expect_error 2 "resolution '0x10'" "$msdeform" scene lift --resolution 0x10 -o .
 expect_error 2 "resolution ' 100'" "$msdeform" scene lift --resolution " 100" -o .
+# Integers are decimal: 010 was read as octal 8, 0x10 as 16, and 2.5 called "not in range".
+expect_error 2 "--lattice-cells: '0x10' is not a whole decimal number" \
+  "$msdeform" deform --scene lift --method lattice --lattice-cells 0x10 -o x.off
+expect_error 2 "--lattice-cells: '2.5' is not a whole decimal number" \
+  "$msdeform" deform --scene lift --method lattice --lattice-cells 2.5 -o x.off
+"$msdeform" deform --scene lift --method arap --iterations 010 -o x.off >out.txt 2>&1 || { cat out.txt; fail "--iterations 010"; }
+grep -q "frame: 10 iterations" out.txt || { cat out.txt; fail "--iterations 010 was not read as 10"; }
 # A length out of range is named, not compared against a bound printed with 300 digits.
 expect_error 2 "'inf' must be a finite length >= 0" "$msdeform" render --scene lift --color detail --detail-scale inf -o x.png
 [ "$(wc -c <err.txt)" -lt 300 ] || { cat err.txt; fail "the --detail-scale message is too long"; }

@@ -268,6 +268,10 @@ FileContents read_obj(std::string_view text, const std::string& path, const std:
     const std::string_view key = next_token(line);
     if (key == "v") {
       soup.points.push_back(parse_point(line, reader));
+      // x y z r g b (or x y z w r g b): a vertex colour; a lone fourth number is the rational weight w.
+      int extra = 0;
+      while (!next_token(line).empty()) ++extra;
+      if (extra >= 2 && soup.first_attribute_line == 0) soup.first_attribute_line = reader.number();
     } else if (key == "f") {
       const long nv = static_cast<long>(soup.points.size());
       int n = 0;
@@ -298,8 +302,8 @@ FileContents read_obj(std::string_view text, const std::string& path, const std:
                return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
              }))
       reader.fail("not an OBJ statement: '" + printable(key.substr(0, 40)) + "'");
-    // Texture coordinates, normals and materials a written result will not have.
-    else if ((key == "vt" || key == "vn" || key == "usemtl" || key == "mtllib") &&
+    // Texture coordinates, normals, materials, lines and points a written result will not have.
+    else if ((key == "vt" || key == "vn" || key == "usemtl" || key == "mtllib" || key == "l" || key == "p") &&
              soup.first_attribute_line == 0)
       soup.first_attribute_line = reader.number();
   }
@@ -372,6 +376,7 @@ class PlyReader {
       skip_space();
       if (pos_ < text_.size()) soup.first_ignored_line = line_;
     }
+    soup.first_attribute_line = first_unread_line_;
     if (!property_.empty() && soup.vertex_property.size() != soup.points.size()) {
       std::string names;
       for (const Element& e : elements_)
@@ -498,6 +503,11 @@ class PlyReader {
         if (elements_.back().name == "vertex" && prop.list_count_type.empty() && prop.name.size() == 1 &&
             prop.name[0] >= 'x' && prop.name[0] <= 'z')
           prop.coordinate = prop.name[0] - 'x';
+        const bool read = elements_.back().name == "vertex"
+                              ? prop.coordinate >= 0 || prop.name == property_
+                              : (elements_.back().name == "face" || elements_.back().name == "tristrips") &&
+                                    (prop.name == "vertex_indices" || prop.name == "vertex_index");
+        if (!read && first_unread_line_ == 0) first_unread_line_ = line_;  // colours, normals, face data
         elements_.back().props.push_back(prop);
       } else if (key == "end_header") {
         end_of_line();
@@ -650,6 +660,7 @@ class PlyReader {
   bool binary_ = false;
   bool swap_bytes_ = false;  // binary_big_endian
   bool in_header_ = true;
+  int first_unread_line_ = 0;  // header line of the first property read past (a colour, a normal), or 0
   std::vector<Element> elements_;
 };
 

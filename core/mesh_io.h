@@ -22,8 +22,10 @@ struct LoadReport {
   //! than its header declares), or 0.
   int first_ignored_line = 0;
   //! OFF: the first vertex or face line with numbers after its coordinates or indices (a COFF's colours,
-  //! an NOFF's normals); OBJ: the first texture coordinate, normal or material line (vt, vn, usemtl,
-  //! mtllib). Read past and not kept (a written result holds positions and triangles); 0 if none.
+  //! an NOFF's normals); OBJ: the first texture coordinate, normal, material, line or point statement (vt,
+  //! vn, usemtl, mtllib, l, p) or vertex colour; PLY: the header line of the first property other than the
+  //! coordinates and corner lists (colours, normals, face data). Read past and not kept (a written result
+  //! holds positions and triangles); 0 if none.
   int first_attribute_line = 0;
 };
 

@@ -103,11 +103,11 @@ void add_deform_command(CLI::App& app) {
                            "split along seams): it deforms as separate pieces there; --weld 0 joins them\n",
                    c.seam_vertices);
     if (c.load_report.first_attribute_line > 0)
-      std::fprintf(
-          stderr,
-          "warning: %s line %d: its colours, normals, texture coordinates or materials are not kept: "
-          "%s holds positions and triangles only\n",
-          c.path.c_str(), c.load_report.first_attribute_line, output->c_str());
+      std::fprintf(stderr,
+                   "warning: %s line %d: its colours, normals, texture coordinates, materials or other data "
+                   "are not kept: "
+                   "%s holds positions and triangles only\n",
+                   c.path.c_str(), c.load_report.first_attribute_line, output->c_str());
     if (c.load_report.first_ignored_line > 0)
       std::fprintf(stderr, "warning: %s holds more than its header declares: data from line %d on was ignored\n",
                    c.path.c_str(), c.load_report.first_ignored_line);

@@ -249,7 +249,7 @@ grep -q "sizes  *coordinates too large" out.txt || fail "info does not name the 
 printf 'mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\nf 2/1/1 4/1/1 3/1/1\n' > uv.obj
 "$msdeform" deform uv.obj --handle vertex:3,0 --translate 0,0,0.1 --method rbf -o uv-out.obj >out.txt 2>&1 ||
   { cat out.txt; fail "deform of an OBJ with texture coordinates"; }
-grep -q "uv.obj line 1: its colours, normals, texture coordinates or materials are not kept" out.txt ||
+grep -q "uv.obj line 1: its colours, normals, texture coordinates, materials or other data are not kept" out.txt ||
   { cat out.txt; fail "no warning that the OBJ's attributes are lost"; }
 "$msdeform" deform split.off --sel split.sel --def lift.def --method shell -o apart.off >/dev/null 2>err.txt ||
   fail "deform of the split plane"

@@ -536,6 +536,25 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
     load_soup(write("plain.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), &report);
     CHECK(report.first_attribute_line == 0);
   }
+  // OBJ and PLY colours, normals and the like are reported too (only OFF's were).
+  {
+    LoadReport report;
+    load_soup(write("vc.obj", "v 0 0 0\nv 1 0 0 1 0 0\nv 0 1 0\nf 1 2 3\n"), &report);
+    CHECK(report.first_attribute_line == 2);
+    load_soup(write("w.obj", "v 0 0 0 1\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n"), &report);
+    CHECK(report.first_attribute_line == 4);
+    load_soup(write("plain.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), &report);
+    CHECK(report.first_attribute_line == 0);
+    const std::string head =
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\n";
+    const std::string tail = "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    load_soup(write("c.ply", head + "property uchar red\n" + tail + "0 0 0 9\n1 0 0 9\n0 1 0 9\n3 0 1 2\n"),
+              &report);
+    CHECK(report.first_attribute_line == 7);
+    load_soup(write("p.ply", head + tail + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), &report);
+    CHECK(report.first_attribute_line == 0);
+  }
   // The longest header prefix, texture coordinates, colours and normals: read past (it was "not an OFF
   // file").
   {

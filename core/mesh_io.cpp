@@ -1156,7 +1156,16 @@ void save_mesh(const Positions& P, const Faces& F, const std::string& path, cons
       throw InvalidInput("save_mesh: " + path +
                          ": STL stores triangles only and there are none (a point cloud): "
                          "use .ply, .off or .obj; nothing written");
-    // Binary STL holds single precision: a coordinate beyond its range would be written as inf.
+    // Binary STL holds single precision: a coordinate beyond its range would be written as inf, and a mesh
+    // whose coordinates all lie below its normal range (1.2e-38) and float's 7 digits above it would lose
+    // its digits or collapse to a point (a tetrahedron 1e-50 across came back as one vertex).
+    constexpr double kSmallest = static_cast<double>(std::numeric_limits<float>::min()) /
+                                 std::numeric_limits<float>::epsilon();  // about 1e-31
+    if (const double largest = nv > 0 ? P.cwiseAbs().maxCoeff() : 0.0; largest > 0 && largest < kSmallest)
+      throw InvalidInput(
+          "save_mesh: " + path + ": the largest coordinate is " + format_number(largest) +
+          ", too small for the single precision STL stores (its digits need 1e-31 or more): use "
+          ".ply, .off or .obj; nothing written");
     for (long i = 0; i < nv; ++i)
       if (!(P.row(i).cwiseAbs().maxCoeff() <= std::numeric_limits<float>::max()))
         throw InvalidInput(

@@ -109,6 +109,12 @@ TEST_CASE("STL refuses coordinates beyond single precision instead of writing in
   P(1, 0) = 3e38;
   save_mesh(P, F, tmp.file("ok.stl"));
   CHECK(load_soup(tmp.file("ok.stl")).P.allFinite());
+  // A mesh 1e-50 across was written as one point (float flushed it to 0), exit 0.
+  P(1, 0) = 3;
+  CHECK_THROWS_WITH(
+      save_mesh(P * 1e-50, F, tmp.file("tiny.stl")),
+      Contains("the largest coordinate is 3e-50, too small for the single precision STL stores"));
+  CHECK_FALSE(std::filesystem::exists(tmp.file("tiny.stl")));
 }
 
 TEST_CASE("real meshes load with the right counts", "[core][io][real]") {

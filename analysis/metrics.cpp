@@ -8,6 +8,7 @@
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/core/rotation.h"
@@ -166,6 +167,8 @@ DetailDistortionMetric::DetailDistortionMetric(const Positions& rest, const Face
   free_ = region.free_vertices();
   if (free_.empty())
     throw InvalidInput(std::string(who) + ": the region has no free vertex to measure details on");
+  check_extent(rest,
+               who);  // its fairing works within msdeform's sizes (at 1e100: "no face of non-zero area")
 
   const Positions B0 = fair_region(rest, F, region, fairing);
   // A free region that fairing shrinks to a membrane (a tube bent or twisted over most of its length: the
@@ -242,16 +245,28 @@ std::optional<double> volume(const Positions& P, const Faces& F) {
   return signed_volume(P, F);
 }
 
+// Volumes in units of the rest's largest bounding-box side: a ratio of volumes holds at any size, where the
+// cubes of coordinates beyond 1e±103 overflowed (NaN) or underflowed (a closed mesh read "not closed").
+namespace {
+double volume_unit(const Positions& rest) {
+  if (rest.rows() == 0) return 1;
+  const double d = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).maxCoeff();  // no squares
+  return d > 0 && std::isfinite(d) ? d : 1;
+}
+}  // namespace
+
 VolumeChangeMetric::VolumeChangeMetric(const Positions& rest, const Faces& F)
-    : F_(F), num_vertices_(rest.rows()), rest_volume_(volume(rest, F)) {}
+    : F_(F), num_vertices_(rest.rows()), unit_(volume_unit(rest)), rest_volume_(volume(rest, F)) {
+  if (rest_volume_) unit_rest_volume_ = signed_volume(rest / unit_, F);
+}
 
 std::optional<double> VolumeChangeMetric::measure(const Positions& deformed) const {
   if (deformed.rows() != num_vertices_)
     throw InvalidInput("volume_change: rest has " + std::to_string(num_vertices_) + " vertices but deformed has " +
                        std::to_string(deformed.rows()));
-  if (!rest_volume_ || *rest_volume_ == 0) return std::nullopt;
+  if (!rest_volume_ || unit_rest_volume_ == 0) return std::nullopt;
   check_mesh_arrays(deformed, F_, "volume");  // closed like the rest shape: same faces
-  return signed_volume(deformed, F_) / *rest_volume_ - 1.0;
+  return signed_volume(deformed / unit_, F_) / unit_rest_volume_ - 1.0;
 }
 
 std::optional<double> volume_change(const Positions& rest, const Positions& deformed, const Faces& F) {

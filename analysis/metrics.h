@@ -166,15 +166,18 @@ class VolumeChangeMetric {
  public:
   //! rest: #V by 3, F: #F by 3. \throw as volume().
   VolumeChangeMetric(const Positions& rest, const Faces& F);
-  //! V(deformed)/V(rest) − 1 for deformed (#V by 3); std::nullopt when the mesh is not closed or the rest
-  //! volume is 0 (deformed is then not read). \throw InvalidInput for another row count and as volume().
+  //! V(deformed)/V(rest) − 1 for deformed (#V by 3), at any finite size (volumes measured in units of the
+  //! rest's largest bounding-box side); std::nullopt when the mesh is not closed or the rest volume is 0
+  //! (deformed is then not read). \throw InvalidInput for another row count and as volume().
   std::optional<double> measure(const Positions& deformed) const;
   const std::optional<double>& rest_volume() const { return rest_volume_; }  //!< std::nullopt if not closed
 
  private:
   Faces F_;
   Eigen::Index num_vertices_ = 0;
+  double unit_ = 1;  // the rest's largest bounding-box side: volumes are compared in this unit
   std::optional<double> rest_volume_;
+  double unit_rest_volume_ = 0;  // in units of unit_³
 };
 
 //! Relative volume change V(deformed)/V(rest) − 1 (a uniform scaling by s gives s³ − 1). std::nullopt

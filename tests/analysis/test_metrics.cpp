@@ -158,6 +158,12 @@ TEST_CASE("volume: icosphere converges to 4/3 pi, scaling changes it by s^3 - 1"
     REQUIRE(change);
     CHECK(*change == Approx(s * s * s - 1).margin(1e-12));
   }
+  // At any finite size: cubes beyond 1e+-103 overflowed to NaN, or underflowed to "not closed" (None).
+  for (double size : {1e-110, 1e110, 1e-300, 1e300}) {
+    const std::optional<double> change = volume_change(size * P, 1.1 * size * P, F);
+    REQUIRE(change);
+    CHECK(*change == Approx(0.331).margin(1e-12));
+  }
   // Inside-out orientation gives a negative volume.
   Faces flipped = F;
   flipped.col(1).swap(flipped.col(2));

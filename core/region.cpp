@@ -249,9 +249,6 @@ Region read_dmat_groups(const std::string& path, int num_vertices) {
 
 std::vector<Mat4> read_def(const std::string& path) {
   const auto values = read_numbers<double>(path, "read_def", "a number");
-  if (values.empty() || values.size() % 16 != 0)
-    throw InvalidInput("read_def: " + path + " has " + std::to_string(values.size()) +
-                       " numbers; expected one 4x4 matrix (16 numbers, row by row) per handle");
   // Rows of 4 numbers per line, or a whole matrix on one line: a row split over lines (3 then 5 numbers)
   // says the file is not what its writer meant.
   for (size_t i = 0; i < values.size();) {
@@ -265,6 +262,9 @@ std::vector<Mat4> read_def(const std::string& path) {
                          "; a .def holds each matrix row by row, 4 numbers per line (or 16 on one line)");
     i += n;
   }
+  if (values.empty() || values.size() % 16 != 0)
+    throw InvalidInput("read_def: " + path + " has " + std::to_string(values.size()) +
+                       " numbers; expected one 4x4 matrix (16 numbers, row by row) per handle");
   std::vector<Mat4> out(values.size() / 16);
   for (size_t h = 0; h < out.size(); ++h) {
     for (int k = 0; k < 16; ++k) {

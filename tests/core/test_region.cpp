@@ -90,7 +90,11 @@ TEST_CASE("bad selection and transform files give specific errors", "[core][regi
   CHECK(read_sel(write("bom.sel", "\xEF\xBB\xBF" "0\n1\n2\n"), 3).codes() == std::vector<int>{0, 1, 2});
   CHECK_THROWS_WITH(read_sel(write("word.sel", "0\nx\n2\n"), 3), Contains("line 2") && Contains("found 'x'"));
   CHECK_THROWS_WITH(read_def(write("bad.def", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0\n")),
-                    Contains("15 numbers") && Contains("4x4"));
+                    Contains("line 4: 3 numbers starting at entry 12 of matrix 0"));
+  CHECK_THROWS_WITH(read_def(write("short.def", "1 0 0 0\n0 1 0 0\n0 0 1 0\n")),
+                    Contains("12 numbers") && Contains("4x4"));
+  // Twelve on one line was "12 numbers; expected one 4x4 matrix" without its line.
+  CHECK_THROWS_WITH(read_def(write("twelve.def", "1 0 0 0 0 1 0 0 0 0 1 0\n")), Contains("line 1: 12 numbers"));
   CHECK_THROWS_WITH(read_def(write("proj.def", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n")), Contains("not affine"));
   // A row split over lines (3 numbers, then 5) was read as if the line breaks were not there.
   CHECK_THROWS_WITH(

@@ -25,12 +25,15 @@ void check_extent(const Positions& P, const std::string& who) {
                        " vertices are at one point)");
   const bool large = !(std::max(diagonal, largest) < kMaxExtent);
   if (large || !(diagonal >= kMinExtent))
-    throw InvalidInput(who + ": coordinates too " + (large ? "large" : "small") +
-                       ": the bounding-box diagonal is " +
-                       (std::isfinite(diagonal) ? format_number(diagonal) : std::string("beyond the largest double")) +
-                       " and the largest |coordinate| " + format_number(largest) +
-                       "; msdeform works with sizes from 1e-70 to 1e70 (squared areas must fit a double): rescale "
-                       "the input");
+    throw InvalidInput(
+        who + ": coordinates too " + (large ? "large" : "small") + ": the bounding-box diagonal is " +
+        (std::isfinite(diagonal) ? format_number(diagonal) : std::string("beyond the largest double")) +
+        " and the largest |coordinate| " + format_number(largest) +
+        "; msdeform works with sizes from 1e-70 to 1e70 (squared areas must fit a double): " +
+        // A shape of a fine size far from the origin needs moving, not scaling.
+        (large && diagonal < kMaxExtent && diagonal >= kMinExtent
+             ? std::string("move the input nearer the origin (centre it)")
+             : std::string("rescale the input")));
 }
 
 std::string extent_outlier_warning(const Positions& P, const Faces& F, const std::string& who) {

@@ -259,13 +259,16 @@ void add_deform_command(CLI::App& app) {
     for (const auto* list : {&deformer->prepare_warnings(), &report.warnings})
       for (const std::string& w : *list) std::fprintf(stderr, "warning: %s\n", in_file_numbering(w).c_str());
     if (!intersections.empty()) std::fprintf(stderr, "warning: %s\n", intersections.c_str());
-    // Without a free vertex the prepare warning on torn edges says why they stretch.
+    // Without a free vertex the prepare warning on torn edges says why they stretch. ARAP, alone or under
+    // the details, is already the method that keeps proportions best.
+    const auto* multiscale = dynamic_cast<const MultiscaleDeformer*>(deformer.get());
+    const bool arap = (multiscale ? multiscale->base_deformer().name() : deformer->name()) == "arap";
     if (const std::string w =
             has_free ? shape_change_warning(shape, edit_scaling(c.transforms)) : std::string();
         !w.empty())
       std::fprintf(stderr, "warning: %s%s\n", w.c_str(),
-                   deformer->name() == "arap" ? "; more ARAP iterations or a larger fixed region may help"
-                                              : "; arap keeps the proportions best");
+                   arap ? "; more ARAP iterations or a larger fixed region may help"
+                        : "; arap keeps the proportions best");
     if (report.folded_faces > 0)
       std::fprintf(stderr, "advice: %s\n", fold_advice(*deformer, c.transforms).c_str());
     std::printf("  wrote %s\n", output->c_str());

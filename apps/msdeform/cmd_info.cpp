@@ -54,7 +54,7 @@ void print_info(const std::string& what, const MeshInfo& i, const LoadReport* re
   if (!i.size_problem.empty())  // "sizes: coordinates too large: ..."
     std::printf("  sizes                %s\n", i.size_problem.substr(i.size_problem.find(':') + 1).c_str());
   if (!i.size_problem.empty())
-    std::printf("  surface               not for any method until rescaled (sizes above)\n");
+    std::printf("  surface               not for any method at these sizes (above)\n");
   else if (i.surface_problem.empty())
     std::printf("  surface               manifold and oriented: for surface and space methods\n");
   else

@@ -115,8 +115,9 @@ void add_render_command(CLI::App& app) {
                    w.c_str());
     render_png(c.P, c.F, *output, o);
     edit->write_built(c.region, c.transforms);
-    std::printf("wrote %s (%dx%d, up %+.0f %+.0f %+.0f)\n", output->c_str(), o.width, o.height, o.up.x(), o.up.y(),
-                o.up.z());
+    std::printf("wrote %s (%dx%d, up %+.0f %+.0f %+.0f)\n", output->c_str(), o.width, o.height,
+                o.up.x() + 0.0, o.up.y() + 0.0,
+                o.up.z() + 0.0);  // + 0.0: no "-0"
   });
 }
 

@@ -238,6 +238,12 @@ class Edit:
     def __iter__(self):
         return iter((self.V, self.F, self.labels, self.transforms))
 
+    def __len__(self):
+        return 4
+
+    def __getitem__(self, i):  # edit[0] is V, as for a tuple (V, F, labels, transforms)
+        return (self.V, self.F, self.labels, self.transforms)[i]
+
     def __repr__(self):
         handles = len(self.transforms)
         return (f"<msdeform.Edit {self.name!r}: {self.V.shape[0]} vertices, {self.F.shape[0]} faces, "
@@ -258,6 +264,10 @@ def scene(name, resolution=10000):
 
     Raises msdeform.InvalidInput (ValueError) for an unknown name (listing the known ones) or a
     resolution out of [16, 2e7]; TypeError for a resolution that is neither an int nor a string."""
+    if not isinstance(name, str):
+        raise TypeError(f"scene name must be a string (msdeform.scene_names()), got {type(name).__name__}")
+    if isinstance(resolution, int) and not isinstance(resolution, bool) and not 0 <= resolution < 2**31:
+        resolution = str(resolution)  # refused by range in words, as the string form is (not a cast error)
     return Edit(**_m._scene(name, resolution))
 
 

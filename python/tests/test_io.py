@@ -154,6 +154,13 @@ def test_scenes(lift):
         msdeform.scene("nope")
     with pytest.raises(TypeError, match="resolution"):
         msdeform.scene("lift", 1000.5)
+    # An Edit indexes like the tuple it unpacks to; a huge int or no name is refused in words (they raised
+    # pybind11's cast errors).
+    assert lift[0] is lift.V and lift[3] is lift.transforms and len(lift) == 4
+    with pytest.raises(ValueError, match="resolution '9223372036854775808': expected a vertex count"):
+        msdeform.scene("lift", 2**63)
+    with pytest.raises(TypeError, match="scene name must be a string"):
+        msdeform.scene(None)
 
 
 def test_transform_helpers_refuse_non_finite_values():

@@ -419,8 +419,14 @@ class PlyReader {
       }
       strip.clear();
     };
+    // The restart is -1, or in an unsigned list its largest value (0xFFFF, 0xFFFFFFFF), as -1 is written
+    // there.
+    const double restart = type == "ushort" || type == "uint16" ? 65535.0
+                           : type == "uint" || type == "uint32" ? 4294967295.0
+                                                                : -1.0;
     for (long j = 0; j < static_cast<long>(n); ++j) {
-      const double idx = value(type);
+      double idx = value(type);
+      if (idx == restart) idx = -1;
       if (idx != std::floor(idx) || idx < -1 || idx > 2147483647.0)
         fail("tristrips " + std::to_string(item) + " has vertex index " + number(idx) +
              ", not -1 or an index");

@@ -86,6 +86,11 @@ TEST_CASE("PLY triangle strips load as triangles; other elements listing corners
     binary.append(reinterpret_cast<const char*>(&p), 4);
   binary.push_back(7);
   for (const int i : {0, 1, 3, 2, -1, 1, 4}) binary.append(reinterpret_cast<const char*>(&i), 4);
+  // In an unsigned list the restart is the largest value (it was refused as index 4.29497e+09).
+  std::string unsigned_strips = ascii;
+  unsigned_strips.replace(unsigned_strips.find("list int int"), 12, "list int uint");
+  unsigned_strips.replace(unsigned_strips.find(" -1 "), 4, " 4294967295 ");
+  CHECK(load_soup(tmp.write("strips-u.ply", unsigned_strips)).F == a.F);
   const TriangleSoup b = load_soup(tmp.write("strips-b.ply", binary));
   CHECK(b.F.rows() == 2);  // the second strip, 1 4, is too short for a triangle
   CHECK_THROWS_WITH(

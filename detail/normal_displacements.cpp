@@ -376,6 +376,7 @@ void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Posi
   reconstructed_fallbacks_.clear();
   for (int v : report.fallback_vertices)
     if (!placed[v]) reconstructed_fallbacks_.push_back(v);
+  reconstructed_vertices_ = static_cast<int>(std::count(placed.begin(), placed.end(), 0));
   samples_ = std::move(samples);
   base_faces_ = Fb;
   normals_ = std::move(normals);
@@ -445,11 +446,13 @@ std::vector<std::string> NormalDisplacements::encode_warnings() const {
   if (fallback.empty()) return {};
   std::string ids;
   for (size_t k = 0; k < fallback.size() && k < 5; ++k) ids += (k ? ", " : "") + std::to_string(fallback[k]);
-  return {"normal displacements: " + std::to_string(fallback.size()) + " of " +
-          std::to_string(report_.fallback + report_.converged) +
-          " vertices found no base point along the base's normals (Newton did not converge) and were encoded "
-          "from their closest point on B, so the details there are not reproduced exactly (vertices " + ids +
-          (fallback.size() > 5 ? ", ..." : "") + "); a smoother base (a larger detail scale) usually removes them"};
+  return {"normal displacements: " + std::to_string(fallback.size()) + " of the " +
+          std::to_string(reconstructed_vertices_) +
+          " vertices a frame reconstructs found no base point along the base's normals (Newton did not "
+          "converge) and were encoded "
+          "from their closest point on B, so the details there are not reproduced exactly (vertices " +
+          ids + (fallback.size() > 5 ? ", ..." : "") +
+          "); a smoother base (a larger detail scale) usually removes them"};
 }
 
 }  // namespace msd

@@ -100,6 +100,7 @@ class NormalDisplacements : public DetailEncoding {
   Eigen::VectorXd height_;
   EncodeReport report_;
   std::vector<int> reconstructed_fallbacks_;  // report_.fallback_vertices that are not placed
+  int reconstructed_vertices_ = 0;            // vertices that are not placed (a frame reconstructs them)
 };
 
 //! One-shot: the signed normal-displacement heights (#Vs) of S over the base (B, Fb), e.g. to measure

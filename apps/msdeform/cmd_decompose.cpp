@@ -107,6 +107,14 @@ void add_decompose_command(CLI::App& app) {
     if (unused > 0) std::printf(" (%ld vertices no face uses: height 0)", unused);
     std::printf("\n");
     if (!report.warning.empty()) std::fprintf(stderr, "warning: %s\n", report.warning.c_str());
+    if (details.report().fallback > 0)
+      std::fprintf(
+          stderr,
+          "warning: %d vertices found no base point along the base's normals (Newton did not converge): "
+          "their heights%s are those of their closest points on B; a smoother base%s usually removes "
+          "them\n",
+          details.report().fallback, same_connectivity ? " (the 'detail' property)" : "",
+          report.kind == DecompositionKind::LowPass ? " (a larger --detail-scale)" : "");
     std::printf("  wrote %s\n", output->c_str());
   });
 }

@@ -338,7 +338,8 @@ TEST_CASE("normal displacements: fallback to the closest point is reported and f
   // The dropped tangential part is small here: the result stays near S.
   CHECK(test::max_row_distance(out, S) <= 0.1);
   REQUIRE(nd.encode_warnings().size() == 1);
-  CHECK_THAT(nd.encode_warnings()[0], Contains(std::to_string(report.fallback) + " of " + std::to_string(S.rows())));
+  CHECK_THAT(nd.encode_warnings()[0], Contains(std::to_string(report.fallback) + " of the " +
+                                               std::to_string(S.rows()) + " vertices a frame"));
   // The warning leaves out vertices the caller places: only the fallbacks it still reconstructs.
   NormalDisplacements placed(options);
   std::vector<int> all_but_one(report.fallback_vertices.begin() + 1, report.fallback_vertices.end());
@@ -346,7 +347,9 @@ TEST_CASE("normal displacements: fallback to the closest point is reported and f
   placed.encode(S, Fs, B, Fb);
   REQUIRE(placed.encode_warnings().size() == 1);
   CHECK_THAT(placed.encode_warnings()[0],
-             Contains("1 of " + std::to_string(S.rows())) &&
+             // out of the vertices it reconstructs (it said "1 of" all of S's)
+             Contains("1 of the " + std::to_string(S.rows() - static_cast<long>(all_but_one.size())) +
+                      " vertices") &&
                  Contains("(vertices " + std::to_string(report.fallback_vertices[0]) + ")"));
   placed.set_placed_vertices(report.fallback_vertices);
   placed.encode(S, Fs, B, Fb);

@@ -67,7 +67,7 @@ TEST_CASE("binary little-endian PLY loads in double precision, extra properties 
   CHECK_THROWS_WITH(load_mesh(tmp.file("cut.ply")), Contains("ends inside the binary data"));
 }
 
-TEST_CASE("PLY triangle strips load as triangles; other elements listing corners are refused", "[core][io]") {
+TEST_CASE("PLY triangle strips load as triangles, other elements listing corners are refused", "[core][io]") {
   // A tristrips element loaded as a point cloud without a word, and a space method wrote it back faceless.
   test::TempDir tmp;
   const std::string vertices = "element vertex 5\nproperty float x\nproperty float y\nproperty float z\n";

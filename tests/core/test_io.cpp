@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <random>
 #include <sstream>
+#include <tuple>
 
 #include "msdeform/core/edit_case.h"
 #include "msdeform/core/errors.h"
@@ -537,34 +538,27 @@ TEST_CASE("a corpus of bad mesh files gives specific errors, never a crash", "[c
                     Contains("'4OFF' (homogeneous or n-dimensional coordinates) is not supported"));
   CHECK_THROWS_WITH(load_soup(write("n.off", "nOFF\n3\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")),
                     Contains("'nOFF'"));
-  // A COFF's colours are read past and reported (they were dropped without a word); plain OFF reports none.
+  // Colours, normals and the like are read past and reported: a COFF's (they were dropped without a word),
+  // then OBJ's and PLY's (only OFF's were); plain files report none.
   {
-    LoadReport report;
-    load_soup(write("colours.off", "COFF\n3 1 0\n0 0 0\n1 0 0 0.9 0 0 1\n0 1 0\n3 0 1 2 1 0 0\n"), &report);
-    CHECK(report.first_attribute_line == 4);
-    load_soup(write("face-colour.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 1 0 0\n"), &report);
-    CHECK(report.first_attribute_line == 6);
-    load_soup(write("plain.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), &report);
-    CHECK(report.first_attribute_line == 0);
-  }
-  // OBJ and PLY colours, normals and the like are reported too (only OFF's were).
-  {
-    LoadReport report;
-    load_soup(write("vc.obj", "v 0 0 0\nv 1 0 0 1 0 0\nv 0 1 0\nf 1 2 3\n"), &report);
-    CHECK(report.first_attribute_line == 2);
-    load_soup(write("w.obj", "v 0 0 0 1\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n"), &report);
-    CHECK(report.first_attribute_line == 4);
-    load_soup(write("plain.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), &report);
-    CHECK(report.first_attribute_line == 0);
     const std::string head =
-        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-        "property float z\n";
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
     const std::string tail = "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
-    load_soup(write("c.ply", head + "property uchar red\n" + tail + "0 0 0 9\n1 0 0 9\n0 1 0 9\n3 0 1 2\n"),
-              &report);
-    CHECK(report.first_attribute_line == 7);
-    load_soup(write("p.ply", head + tail + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), &report);
-    CHECK(report.first_attribute_line == 0);
+    const std::vector<std::tuple<std::string, std::string, int>> cases = {
+        {"colours.off", "COFF\n3 1 0\n0 0 0\n1 0 0 0.9 0 0 1\n0 1 0\n3 0 1 2 1 0 0\n", 4},
+        {"face-colour.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 1 0 0\n", 6},
+        {"plain.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", 0},
+        {"vc.obj", "v 0 0 0\nv 1 0 0 1 0 0\nv 0 1 0\nf 1 2 3\n", 2},
+        {"w.obj", "v 0 0 0 1\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n", 4},  // a lone w is no colour
+        {"plain.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", 0},
+        {"c.ply", head + "property uchar red\n" + tail + "0 0 0 9\n1 0 0 9\n0 1 0 9\n3 0 1 2\n", 7},
+        {"p.ply", head + tail + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", 0}};
+    for (const auto& [name, text, line] : cases) {
+      LoadReport report;
+      load_soup(write(name, text), &report);
+      INFO(name);
+      CHECK(report.first_attribute_line == line);
+    }
   }
   // The longest header prefix, texture coordinates, colours and normals: read past (it was "not an OFF
   // file").

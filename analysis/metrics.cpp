@@ -167,8 +167,8 @@ DetailDistortionMetric::DetailDistortionMetric(const Positions& rest, const Face
   free_ = region.free_vertices();
   if (free_.empty())
     throw InvalidInput(std::string(who) + ": the region has no free vertex to measure details on");
-  check_extent(rest,
-               who);  // its fairing works within msdeform's sizes (at 1e100: "no face of non-zero area")
+  // Its fairing works within msdeform's sizes (at 1e100 it failed: "no incident face of non-zero area").
+  check_extent(rest, who);
 
   const Positions B0 = fair_region(rest, F, region, fairing);
   // A free region that fairing shrinks to a membrane (a tube bent or twisted over most of its length: the

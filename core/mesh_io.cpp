@@ -32,8 +32,8 @@ struct FileContents {
   std::vector<double> vertex_property;  // PLY: the values of the property asked for (PlyReader)
   std::vector<int> corners, offsets{0}, lines;
   int first_ignored_line = 0;  // OFF and ASCII PLY: the first line of data after the header's counts
-  // OFF: the first record with numbers past its coordinates or indices; OBJ: the first vt, vn, usemtl or
-  // mtllib
+  // LoadReport::first_attribute_line: OFF's first record with numbers past its coordinates or indices,
+  // OBJ's first vt, vn, usemtl, mtllib, l or p or vertex colour, PLY's first header line read past
   int first_attribute_line = 0;
 };
 

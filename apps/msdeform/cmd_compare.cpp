@@ -274,20 +274,15 @@ std::string verdicts_html(const std::vector<MethodResult>& results, const std::v
     << 100 * t.fair_distortion << " % of their height), <span class=\"poor\">poor</span> (over "
     << t.poor_rigidity << "×, or " << 100 * t.poor_distortion << " %; a closed mesh's volume changed by over "
     << 100 * t.fair_volume << " % or " << 100 * t.poor_volume
-    << " % beyond what the handles' scales ask), <span class=\"broken\">broken</span> "
-       "(self-intersecting triangles the edit added, triangles folded over a multi-scale base, or the shape "
-       "lost: a "
-       "rigidity above "
+    << " % beyond what the handles' scales ask), <span class=\"broken\">broken</span> (self-intersecting "
+       "triangles the edit added, triangles folded over a multi-scale base, or the shape lost: a rigidity "
+       "above "
     << t.broken_rigidity << " and " << t.broken_rigidity_ratio
-    << "× the edit's most rigid "
-       "result, or a volume factor above "
-    << t.broken_volume << " and " << t.broken_volume
-    << "× the edit's "
-       "smallest), <span class=\"not-judged\">not judged</span> (no rigidity or "
-       "detail measure, e.g. a point cloud), <span class=\"failed\">failed</span> (with its message); a "
-       "method "
-       "that warned (e.g. did not converge), or whose self-intersections were not counted, is at most fair, "
-       "and "
+    << "× the edit's most rigid result, or a volume factor above " << t.broken_volume << " and "
+    << t.broken_volume
+    << "× the edit's smallest), <span class=\"not-judged\">not judged</span> (no rigidity or detail measure, "
+       "e.g. a point cloud), <span class=\"failed\">failed</span> (with its message); a method that warned "
+       "(e.g. did not converge), or whose self-intersections were not counted, is at most fair, and "
        "says why. "
        "★ marks the best of each edit: of the results with the best verdict there, the most rigid, then the "
        "least detail change (so a good result outranks a more rigid fair one).</p>\n"

@@ -157,6 +157,17 @@ RigidityError rigidity_error(const Positions& rest, const Positions& deformed, c
   return RigidityMetric(rest, F, options).measure(deformed);
 }
 
+namespace {
+// P moved so its bounding box is centred at the origin: heights do not depend on where a surface sits, but
+// a fairing solved in absolute coordinates far out did (the lift's detail change read 3 % at the origin,
+// 12 % at 1e10 and 22 % at 1e11).
+Positions centred(const Positions& P) {
+  if (P.rows() == 0) return P;
+  const Eigen::RowVector3d c = 0.5 * (P.colwise().minCoeff() + P.colwise().maxCoeff());
+  return P.rowwise() - c;
+}
+}  // namespace
+
 DetailDistortionMetric::DetailDistortionMetric(const Positions& rest, const Faces& F, const Region& region,
                                                const FairingOptions& fairing)
     : F_(F), region_(region), fairing_(fairing) {
@@ -168,14 +179,15 @@ DetailDistortionMetric::DetailDistortionMetric(const Positions& rest, const Face
   if (free_.empty())
     throw InvalidInput(std::string(who) + ": the region has no free vertex to measure details on");
   // Its fairing works within msdeform's sizes (at 1e100 it failed: "no incident face of non-zero area").
-  check_extent(rest, who);
+  const Positions R = centred(rest);
+  check_extent(R, who);
 
-  const Positions B0 = fair_region(rest, F, region, fairing);
+  const Positions B0 = fair_region(R, F, region, fairing);
   // A free region that fairing shrinks to a membrane (a tube bent or twisted over most of its length: the
   // survey's cylinder, bar and cactus) has no details over that base, only its shape; the heights would
   // then jump between base points under rounding (measured on the survey cactus: 191 vertices changed by
   // up to 0.24 between two results 2e-16 apart).
-  if (const double kept = free_area_ratio(rest, B0, F, region); kept < kMinBaseAreaRatio) {
+  if (const double kept = free_area_ratio(R, B0, F, region); kept < kMinBaseAreaRatio) {
     char text[300];
     std::snprintf(
         text, sizeof text,
@@ -185,7 +197,7 @@ DetailDistortionMetric::DetailDistortionMetric(const Positions& rest, const Face
     throw InvalidInput(text);
   }
   NormalDisplacements before;
-  before.encode(rest, F, B0, F);
+  before.encode(R, F, B0, F);
   rest_heights_ = before.heights();
   rest_fallback_ = before.report().fallback;
   double max_height = 0;
@@ -199,9 +211,11 @@ DetailDistortion DetailDistortionMetric::measure(const Positions& deformed) cons
   if (deformed.rows() != rest_heights_.size())
     throw InvalidInput("detail_distortion: rest has " + std::to_string(rest_heights_.size()) +
                        " vertices but deformed has " + std::to_string(deformed.rows()));
-  const Positions B1 = fair_region(deformed, F_, region_, fairing_);
+  const Positions D = centred(deformed);
+  check_extent(D, "detail_distortion: the deformed surface");  // a collapse or a blow-up, named as such
+  const Positions B1 = fair_region(D, F_, region_, fairing_);
   NormalDisplacements after;
-  after.encode(deformed, F_, B1, F_);
+  after.encode(D, F_, B1, F_);
 
   DetailDistortion out;
   out.rest_heights = rest_heights_;
@@ -266,7 +280,11 @@ std::optional<double> VolumeChangeMetric::measure(const Positions& deformed) con
                        std::to_string(deformed.rows()));
   if (!rest_volume_ || unit_rest_volume_ == 0) return std::nullopt;
   check_mesh_arrays(deformed, F_, "volume");  // closed like the rest shape: same faces
-  return signed_volume(deformed / unit_, F_) / unit_rest_volume_ - 1.0;
+  // The deformed volume in its own unit, then the ratio of units cubed: a result 1e103 times the rest's size
+  // gave inf − inf = NaN in the rest's unit (now inf, as the ratio is).
+  const double unit = volume_unit(deformed), units = unit / unit_;
+  const double v = signed_volume(deformed / unit, F_);
+  return v == 0 ? -1.0 : v / unit_rest_volume_ * units * units * units - 1.0;
 }
 
 std::optional<double> volume_change(const Positions& rest, const Positions& deformed, const Faces& F) {

@@ -1172,6 +1172,25 @@ void save_mesh(const Positions& P, const Faces& F, const std::string& path, cons
           "save_mesh: " + path + ": the largest coordinate is " + format_number(largest) +
           ", too small for the single precision STL stores (its digits need 1e-31 or more): use "
           ".ply, .off or .obj; nothing written");
+    // And STL has no vertex list: a reader joins equal corners, so vertices that single precision rounds
+    // to one point become one (the lift moved 1e6 away came back with 475 of its 9409 vertices).
+    {
+      std::vector<std::pair<std::array<float, 3>, long>> rounded(static_cast<size_t>(nv));
+      for (long i = 0; i < nv; ++i)
+        rounded[i] = {{static_cast<float>(P(i, 0)), static_cast<float>(P(i, 1)), static_cast<float>(P(i, 2))},
+                      i};
+      std::sort(rounded.begin(), rounded.end());
+      for (size_t k = 1; k < rounded.size(); ++k)
+        if (rounded[k].first == rounded[k - 1].first &&
+            P.row(rounded[k].second) != P.row(rounded[k - 1].second))
+          throw InvalidInput(
+              "save_mesh: " + path + ": vertices " + std::to_string(rounded[k - 1].second) + " and " +
+              std::to_string(rounded[k].second) +
+              " round to one point in the single precision STL stores (edges too short for "
+              "coordinates of " +
+              format_number(P.cwiseAbs().maxCoeff()) +
+              ": move the mesh nearer the origin, or use .ply, .off or .obj); nothing written");
+    }
     for (long i = 0; i < nv; ++i)
       if (!(P.row(i).cwiseAbs().maxCoeff() <= std::numeric_limits<float>::max()))
         throw InvalidInput(

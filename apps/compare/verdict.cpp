@@ -69,10 +69,10 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
   for (const std::string& scene : scenes) {
     const std::vector<size_t> ids = of_scene(results, scene);
     // Self-intersections and folds break a result outright. It also lost the shape where its rigidity or
-    // its volume is both far off in absolute terms and far worse than the edit's best result that did not
-    // tear: an edit may ask for any stretch (a handle pulled 4 times its distance from the fixed part, a
-    // scaled handle), and then every method stretches alike.
-    const auto torn = [](const MethodResult& r) { return r.self_intersections > 0 || r.folded_faces > 0; };
+    // its volume is both far off in absolute terms and far worse than the edit's best result: an edit may
+    // ask for any stretch (a handle pulled 4 times its distance from the fixed part, a scaled handle), and
+    // then every method stretches alike. A volume beyond broken_volume_alone times what the handles ask is
+    // lost whatever else ran (the ballooned cactus run alone, or beside a torn result, was "best").
     const auto volume_factor =
         [](const MethodResult& r) {  // V'/V as a factor >= 1 either way (1: not judged)
           if (!r.volume_change || r.scaling.mirrors) return 1.0;
@@ -82,7 +82,7 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
     double least_rigidity = INFINITY, least_volume = INFINITY;
     for (size_t i : ids) {
       const MethodResult& r = results[i];
-      if (!r.ok || torn(r)) continue;
+      if (!r.ok) continue;
       if (r.rigidity.count > 0)
         least_rigidity = std::min(least_rigidity, std::max(r.rigidity.mean, t.rigid_floor));
       least_volume = std::min(least_volume, volume_factor(r));
@@ -104,7 +104,11 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
         add("rigidity " + fmt("%.3g", r.rigidity.mean) + ", " +
             fmt("%.0f", r.rigidity.mean / least_rigidity) +
             "× the edit's most rigid result (the shape is lost)");
-      if (const double f = volume_factor(r); f > t.broken_volume && f > t.broken_volume * least_volume)
+      const double f = volume_factor(r);
+      const bool beyond_asked =
+          f > 1 && (1 + *r.volume_change > t.broken_volume_alone * r.scaling.volume_high ||
+                    (1 + *r.volume_change) * t.broken_volume_alone < r.scaling.volume_low);
+      if ((f > t.broken_volume && f > t.broken_volume * least_volume) || beyond_asked)
         add("volume changed by " + fmt("%+.3g", 100 * *r.volume_change) + " % (the shape is lost)");
       return why;
     };
@@ -146,17 +150,19 @@ std::vector<Assessment> assess(const std::vector<MethodResult>& results, const V
                          : ratio <= 1 ? "the " + (intersections_counted ? most_rigid : "most rigid result")
                                   : "rigid (" + fmt("%.2g", ratio) + "× the " + most_rigid + ")");
       }
-      // Heights are measured against the rest's: under handles that scale, the details scale with the shape
-      // as asked, and every result read "poor" (details changed by 650–910 % under a cylinder scaled by 3).
-      const bool scaled =
-          r.scaling.growth > 1 + t.scale_tolerance || r.scaling.shrink > 1 + t.scale_tolerance;
-      const bool judge_details = r.distortion.count > 0 && !scaled;
+      // Heights are measured against the rest's: handles that scale by s ask the details to change by up to
+      // |s − 1| of their height, which is allowed; beyond scale_tolerance the measure says little (every
+      // result of a cylinder scaled by 3 read "poor: details changed by 650–910 %") and is not judged.
+      const double scaled = std::max(r.scaling.growth, r.scaling.shrink) - 1;
+      const bool judge_details = r.distortion.count > 0 && !(scaled > t.scale_tolerance);
       if (judge_details) {
-        const double d = r.distortion.mean;
-        const std::string text = "details changed by " + fmt("%.2g", 100 * d) + " % of their height";
+        const double d = std::max(0.0, r.distortion.mean - std::max(0.0, scaled));  // beyond what is asked
+        const std::string measured = fmt("%.2g", 100 * r.distortion.mean) + " %";
+        const std::string text = "details changed by " + measured + " of their height";
         if (d > t.poor_distortion) poor.push_back(text);
         else if (d > t.fair_distortion) fair.push_back(text);
-        else good.push_back("details kept (" + fmt("%.2g", 100 * d) + " %)");
+        else
+          good.push_back("details kept (" + measured + ")");
       }
       // The volume changes as much as the handles' scales ask (EditScaling), up to the shape's give (ARAP
       // loses 13 % on the survey cylinder's 120° bend); a mirrored handle turns its sign (not judged).

@@ -22,20 +22,21 @@ struct VerdictThresholds {
   //! motion reads 1e-31 to 1e-22 from rounding): ratios are taken against at least this.
   double rigid_floor = 1e-6;
   double fair_distortion = 0.10, poor_distortion = 0.25;  //!< of the largest detail height
-  //! Handles that scale by more than this (EditScaling's growth or shrink above 1 + it) scale the details
-  //! with the shape: their heights, measured against the rest's, are then not judged.
-  double scale_tolerance = 1e-3;
+  //! Handles that scale by s allow the details to change by |s − 1| of their height (EditScaling's growth
+  //! or shrink); beyond 1 + scale_tolerance the heights, measured against the rest's, are not judged.
+  double scale_tolerance = 0.1;
   //! Relative volume change of a closed mesh beyond what the handles ask (EditScaling::volume_excess();
   //! without scaling, |V'/V − 1|): beyond these, fair and poor. On the survey cylinder's 120° bend ARAP loses
   //! 13 %, the shell 51 %; `msdeform deform` warns beyond the poor one (shape_change_warning()).
   double fair_volume = 0.15, poor_volume = 0.30;
-  //! A result that did not tear lost the shape, and is broken, when its rigidity mean is above
-  //! broken_rigidity (as a uniform scale by 2 reads) and above broken_rigidity_ratio times the edit's most
-  //! rigid result that did not tear, or its volume factor (V'/V or V/V', closed meshes) above broken_volume
-  //! and above broken_volume times the edit's smallest: Laplacian editing ballooned the survey cactus to
-  //! 31 times its volume (rigidity 5.98; the others below 1.3), while a handle pulled to 4 times its
-  //! distance from the fixed part stretches every method's result alike (ARAP 6.5, volume ×4.3).
-  double broken_rigidity = 1, broken_rigidity_ratio = 10, broken_volume = 3;
+  //! A result lost the shape, and is broken, when its rigidity mean is above broken_rigidity (as a uniform
+  //! scale by 2 reads) and above broken_rigidity_ratio times the edit's most rigid result, or its volume
+  //! factor (V'/V or V/V', closed meshes) is above broken_volume and broken_volume times the edit's smallest,
+  //! or beyond broken_volume_alone times the range the handles ask (EditScaling) whatever else ran:
+  //! Laplacian editing ballooned the survey cactus to 31 times its volume (rigidity 5.98; the others below
+  //! 1.3), while a handle pulled to 4 times its distance from the fixed part stretches every method's
+  //! result alike (ARAP 6.5, volume ×4.3).
+  double broken_rigidity = 1, broken_rigidity_ratio = 10, broken_volume = 3, broken_volume_alone = 10;
 };
 
 struct Assessment {

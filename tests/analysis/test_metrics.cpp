@@ -237,6 +237,15 @@ TEST_CASE("detail distortion: zero for the input and for a rigid motion, 0.5 for
   CHECK(grown.stats.mean > 0.01);
   CHECK(grown.stats.mean < grown.stats.max);
   for (int v : fine.region.constrained_vertices()) REQUIRE(grown.per_vertex[v] == 0);
+  // Wherever the surface sits (while its coordinates hold the bumps: at 1e11 they are rounded to 1.5e-5): the
+  // fairing ran in absolute coordinates, and an edit of the lift read 0.04 at the origin, 0.047 at 1e10 and
+  // 0.074 at 1e11.
+  for (const double offset : {1e10, 1e11}) {
+    const Eigen::RowVector3d o(offset, -0.5 * offset, offset);
+    const DetailDistortion far =
+        detail_distortion(fine.P.rowwise() + o, taller.rowwise() + o, fine.F, fine.region);
+    CHECK(far.stats.mean == Approx(grown.stats.mean).margin(0.01 * grown.stats.mean));
+  }
 
   CHECK_THROWS_AS(detail_distortion(s.P, s.P, s.F, Region(static_cast<int>(s.P.rows()), Region::kFixed)),
                   InvalidInput);

@@ -268,4 +268,27 @@ TEST_CASE("verdicts: under handles that scale, the detail heights are not judged
   CHECK_THAT(a[0].reason, !Contains("details changed"));
   for (MethodResult& r : results) r.scaling = {};
   CHECK(assess(results)[0].verdict == Verdict::Poor);
+  // A scale of 1 % allows 1 % more change, no more (it switched the detail verdict off: 24 % read good).
+  results = {result("lift", "propagate", 0.01, 0.24)};
+  results[0].scaling = edit_scaling({Mat4(Eigen::Vector4d(1.01, 1.01, 1.01, 1).asDiagonal())});
+  CHECK(assess(results)[0].verdict == Verdict::Fair);
+  CHECK_THAT(assess(results)[0].reason, Contains("details changed by 24 %"));
+}
+
+TEST_CASE("verdicts: a volume far beyond what the handles ask is broken whatever else ran",
+          "[compare][verdict]") {
+  // The ballooned cactus alone, or beside a self-intersecting shell, was rated "best, poor".
+  std::vector<MethodResult> results = {result("cactus", "laplacian", 5.98, 0.02)};
+  results[0].volume_change = 30.27;
+  CHECK(assess(results)[0].verdict == Verdict::Broken);
+  results.push_back(result("cactus", "shell", 0.11, 0.02, 207));
+  results[1].volume_change = -0.12;
+  const std::vector<Assessment> a = assess(results);
+  CHECK(a[0].verdict == Verdict::Broken);
+  CHECK_THAT(a[0].reason, Contains("× the edit's most rigid result (the shape is lost)"));
+  CHECK_FALSE(a[0].best);
+  // A handle pulled 4 times its distance, one method alone: stretched as asked, not broken.
+  results = {result("pull", "arap", 6.49, 0.02)};
+  results[0].volume_change = 3.27;
+  CHECK(assess(results)[0].verdict != Verdict::Broken);
 }

@@ -121,6 +121,13 @@ TEST_CASE("STL refuses coordinates beyond single precision instead of writing in
       save_mesh(P * 1e-50, F, tmp.file("tiny.stl")),
       Contains("the largest coordinate is 3e-50, too small for the single precision STL stores"));
   CHECK_FALSE(std::filesystem::exists(tmp.file("tiny.stl")));
+  // Far from the origin single precision joins nearby vertices (a unit triangle at 3e7 came back as one
+  // point).
+  Positions far = P;
+  far.rowwise() += Eigen::RowVector3d(3e7, 3e7, 3e7);
+  CHECK_THROWS_WITH(save_mesh(far, F, tmp.file("far.stl")),
+                    Contains("round to one point in the single precision STL stores"));
+  CHECK_FALSE(std::filesystem::exists(tmp.file("far.stl")));
 }
 
 TEST_CASE("real meshes load with the right counts", "[core][io][real]") {

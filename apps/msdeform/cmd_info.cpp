@@ -42,8 +42,8 @@ void print_info(const std::string& what, const MeshInfo& i, const LoadReport* re
     std::printf("  duplicate faces       %d (dropped)\n", report->duplicate_faces_dropped);
     if (report->first_attribute_line > 0)
       std::printf(
-          "  ignored attributes    from line %d (colours, normals, texture coordinates, materials: read "
-          "past, not kept)\n",
+          "  ignored attributes    from line %d (colours, normals, texture coordinates, materials or other "
+          "data: read past, not kept)\n",
           report->first_attribute_line);
     if (report->first_ignored_line > 0)
       std::printf("  ignored data          from line %d (more than the header's counts)\n", report->first_ignored_line);

@@ -94,9 +94,10 @@ void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::s
     if (reflection)  // its singular values may all read 1 to 3 digits (-1.001, 1, 1)
       std::snprintf(text, sizeof text, "%s%s%zu is %s (determinant %.6g)", who.c_str(),
                     kHandleTransformWarning, k, what, A.determinant());
-    else
-      std::snprintf(text, sizeof text, "%s%s%zu is %s (singular values %.3g, %.3g, %.3g)", who.c_str(),
-                    kHandleTransformWarning, k, what, sigma(0), sigma(1), sigma(2));
+    else  // a near-flat mirror (-1e-7, 1, 1) is also said to mirror
+      std::snprintf(text, sizeof text, "%s%s%zu is %s (singular values %.3g, %.3g, %.3g%s)", who.c_str(),
+                    kHandleTransformWarning, k, what, sigma(0), sigma(1), sigma(2),
+                    A.determinant() < 0 ? "; it also mirrors" : "");
     warnings.emplace_back(text);
   }
 }

@@ -266,7 +266,7 @@ def scene(name, resolution=10000):
     resolution out of [16, 2e7]; TypeError for a resolution that is neither an int nor a string."""
     if not isinstance(name, str):
         raise TypeError(f"scene name must be a string (msdeform.scene_names()), got {type(name).__name__}")
-    if isinstance(resolution, int) and not isinstance(resolution, bool) and not 0 <= resolution < 2**31:
+    if isinstance(resolution, int) and not isinstance(resolution, bool) and not -2**31 <= resolution < 2**31:
         resolution = str(resolution)  # refused by range in words, as the string form is (not a cast error)
     return Edit(**_m._scene(name, resolution))
 

@@ -159,6 +159,8 @@ def test_scenes(lift):
     assert lift[0] is lift.V and lift[3] is lift.transforms and len(lift) == 4
     with pytest.raises(ValueError, match="resolution '9223372036854775808': expected a vertex count"):
         msdeform.scene("lift", 2**63)
+    with pytest.raises(ValueError, match="resolution -1 is out of range"):  # as 0 and 15 are said
+        msdeform.scene("lift", -1)
     with pytest.raises(TypeError, match="scene name must be a string"):
         msdeform.scene(None)
 

@@ -371,6 +371,7 @@ class PlyReader {
           soup.points.push_back(p);
         }
       }
+      vertices_read_ = vertices_read_ || e.name == "vertex";
     }
     if (!binary_) {
       skip_space();
@@ -382,6 +383,12 @@ class PlyReader {
       for (const Element& e : elements_)
         if (e.name == "vertex")
           for (const Property& prop : e.props) names += (names.empty() ? "" : ", ") + prop.name;
+      for (const Element& e : elements_)  // a list by that name: not one value per vertex
+        for (const Property& prop : e.props)
+          if (e.name == "vertex" && prop.name == property_)
+            throw InvalidInput(
+                who_ + ": " + path_ + ": the vertex property '" + printable(property_.substr(0, 60)) +
+                "' is a list, not one value per vertex (its vertex properties: " + names + ")");
       throw InvalidInput(who_ + ": " + path_ + " has no vertex property '" + printable(property_.substr(0, 60)) +
                          "' (its vertex properties: " + names + ")");
     }
@@ -430,6 +437,10 @@ class PlyReader {
       if (idx != std::floor(idx) || idx < -1 || idx > 2147483647.0)
         fail("tristrips " + std::to_string(item) + " has vertex index " + number(idx) +
              ", not -1 or an index");
+      // Named here, as a strip's (the triangles it makes are numbered as faces after the strips are split).
+      if (vertices_read_ && idx >= static_cast<double>(soup.points.size()))
+        fail("tristrips " + std::to_string(item) + " has vertex index " + number(idx) + " out of range [0, " +
+             std::to_string(soup.points.size()) + ")");
       if (idx < 0)
         flush();
       else
@@ -667,6 +678,7 @@ class PlyReader {
   bool swap_bytes_ = false;  // binary_big_endian
   bool in_header_ = true;
   int first_unread_line_ = 0;  // header line of the first property read past (a colour, a normal), or 0
+  bool vertices_read_ = false;  // the vertex element is read (it came before the one being read)
   std::vector<Element> elements_;
 };
 

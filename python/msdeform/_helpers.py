@@ -215,6 +215,14 @@ def handle_vertices(labels, k=0):
 # Edits
 
 
+def _same(a, b):
+    if a is None or b is None:
+        return a is None and b is None
+    if isinstance(a, list) or isinstance(b, list):
+        return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b))
+    return np.array_equal(a, b)
+
+
 class Edit:
     """An edit: name, V (#V, 3) float64, F (#F, 3) int32, labels (#V,) int32 selection codes or None,
     transforms (a list of (4, 4) float64 arrays, one per handle), control (the Loop control mesh of a
@@ -243,6 +251,13 @@ class Edit:
 
     def __getitem__(self, i):  # edit[0] is V, as for a tuple (V, F, labels, transforms)
         return (self.V, self.F, self.labels, self.transforms)[i]
+
+    def __eq__(self, other):  # equal to the tuple it unpacks to, or to an Edit that unpacks alike
+        if isinstance(other, (Edit, tuple)) and len(other) == 4:
+            return all(_same(a, b) for a, b in zip(self, other))
+        return NotImplemented
+
+    __hash__ = None  # mutable, like the arrays it holds
 
     def __repr__(self):
         handles = len(self.transforms)

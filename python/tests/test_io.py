@@ -157,6 +157,7 @@ def test_scenes(lift):
     # An Edit indexes like the tuple it unpacks to; a huge int or no name is refused in words (they raised
     # pybind11's cast errors).
     assert lift[0] is lift.V and lift[3] is lift.transforms and len(lift) == 4
+    assert lift == tuple(lift) and lift != (lift.V, lift.F, lift.labels, [])
     with pytest.raises(ValueError, match="resolution '9223372036854775808': expected a vertex count"):
         msdeform.scene("lift", 2**63)
     with pytest.raises(ValueError, match="resolution -1 is out of range"):  # as 0 and 15 are said

@@ -87,6 +87,11 @@ TEST_CASE("PLY triangle strips load as triangles, other elements listing corners
     binary.append(reinterpret_cast<const char*>(&p), 4);
   binary.push_back(7);
   for (const int i : {0, 1, 3, 2, -1, 1, 4}) binary.append(reinterpret_cast<const char*>(&i), 4);
+  // An index out of range is named as the strip's (it was "face 0", the first triangle of the split).
+  std::string out_of_range = ascii;
+  out_of_range.replace(out_of_range.find(" 1 4 2\n"), 7, " 1 9 2\n");
+  CHECK_THROWS_WITH(load_soup(tmp.write("strips-far.ply", out_of_range)),
+                    Contains("tristrips 0 has vertex index 9 out of range [0, 5)"));
   // In an unsigned list the restart is the largest value (it was refused as index 4.29497e+09).
   std::string unsigned_strips = ascii;
   unsigned_strips.replace(unsigned_strips.find("list int int"), 12, "list int uint");
@@ -880,4 +885,10 @@ TEST_CASE("PLY vertex properties read back by name, ASCII and binary", "[core][i
   save_mesh(P, F, dir.file("m.off"));
   CHECK_THROWS_WITH(load_vertex_property(dir.file("m.off"), "detail"), Contains("read from PLY files"));
   CHECK_THROWS_WITH(load_vertex_property(path, ""), Contains("no property name"));
+  // A list property by that name is there, but not one value per vertex (it was called missing).
+  const std::string lists = dir.write("l.ply",
+                                      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                                      "property float y\nproperty float z\nproperty list uchar float lst\n"
+                                      "end_header\n0 0 0 2 1 2\n");
+  CHECK_THROWS_WITH(load_vertex_property(lists, "lst"), Contains("the vertex property 'lst' is a list"));
 }

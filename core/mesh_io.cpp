@@ -342,12 +342,11 @@ class PlyReader {
             continue;
           }
           const double n = value(prop.list_count_type);  // an integer type (parse_header)
-          const bool corner_list = prop.name == "vertex_indices" || prop.name == "vertex_index";
-          if (e.name == "tristrips" && corner_list) {
+          if (e.name == "tristrips" && prop.corners()) {
             read_strips(n, prop.type, i, item_line, soup);
             continue;
           }
-          const bool indices = e.name == "face" && corner_list;
+          const bool indices = e.name == "face" && prop.corners();
           // Written so that NaN fails too; a fractional count is not an integer either.
           if (!(n >= (indices ? 3 : 0) && n <= (1 << 20)) || n != std::floor(n))
             fail(e.name + " " + std::to_string(i) + " has a list of " + number(n) +
@@ -398,6 +397,8 @@ class PlyReader {
  private:
   struct Property {
     std::string name, type, list_count_type;
+    // A list of a polygon's or a strip's corners.
+    bool corners() const { return !list_count_type.empty() && (name == "vertex_indices" || name == "vertex_index"); }
     int coordinate = -1;  // 0, 1, 2 for x, y, z of a vertex
   };
   struct Element {
@@ -523,7 +524,7 @@ class PlyReader {
         const bool read = elements_.back().name == "vertex"
                               ? prop.coordinate >= 0 || prop.name == property_
                               : (elements_.back().name == "face" || elements_.back().name == "tristrips") &&
-                                    (prop.name == "vertex_indices" || prop.name == "vertex_index");
+                                    prop.corners();
         if (!read && first_unread_line_ == 0) first_unread_line_ = line_;  // colours, normals, face data
         elements_.back().props.push_back(prop);
       } else if (key == "end_header") {
@@ -532,18 +533,13 @@ class PlyReader {
         // A face element must list its corners (other names would drop every face without a word).
         for (const Element& e : elements_) {
           if (e.name != "face" || e.count == 0) continue;
-          if (std::none_of(e.props.begin(), e.props.end(), [](const Property& prop) {
-                return !prop.list_count_type.empty() && (prop.name == "vertex_indices" || prop.name == "vertex_index");
-              }))
+          if (std::none_of(e.props.begin(), e.props.end(), [](const Property& prop) { return prop.corners(); }))
             fail("the face element has no list property 'vertex_indices' (or 'vertex_index')");
         }
         // Corners listed by another element (not face or tristrips) would be dropped without a word.
         for (const Element& e : elements_)
           if (e.name != "face" && e.name != "tristrips" && e.count > 0 &&
-              std::any_of(e.props.begin(), e.props.end(), [](const Property& prop) {
-                return !prop.list_count_type.empty() &&
-                       (prop.name == "vertex_indices" || prop.name == "vertex_index");
-              }))
+              std::any_of(e.props.begin(), e.props.end(), [](const Property& prop) { return prop.corners(); }))
             fail("element '" + printable(e.name.substr(0, 40)) +
                  "' lists vertex indices, which msdeform reads only "
                  "from a 'face' element (polygons) or a 'tristrips' element (triangle strips)");

@@ -51,11 +51,10 @@ void print_info(const std::string& what, const MeshInfo& i, const LoadReport* re
   std::printf("  bounding box          [%.6g %.6g %.6g] .. [%.6g %.6g %.6g]\n", i.bbox_min.x(), i.bbox_min.y(),
               i.bbox_min.z(), i.bbox_max.x(), i.bbox_max.y(), i.bbox_max.z());
   std::printf("  mean edge length      %.6g\n", i.mean_edge_length);
-  if (!i.size_problem.empty())  // "sizes: coordinates too large: ..."
+  if (!i.size_problem.empty()) {  // "sizes: coordinates too large: ..."
     std::printf("  sizes                %s\n", i.size_problem.substr(i.size_problem.find(':') + 1).c_str());
-  if (!i.size_problem.empty())
     std::printf("  surface               not for any method at these sizes (above)\n");
-  else if (i.surface_problem.empty())
+  } else if (i.surface_problem.empty())
     std::printf("  surface               manifold and oriented: for surface and space methods\n");
   else
     std::printf("  surface               %s: for space methods only (lattice, cage-mvc, cage-harmonic, rbf)\n",

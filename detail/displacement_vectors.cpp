@@ -22,6 +22,10 @@ constexpr double kMinTangentFraction = 1e-6;
 constexpr double kMinAreaFraction = TriangleCotangents::kDegenerateAreaRatio;
 // A vertex normal sum shorter than this fraction of its terms' total length has cancelled: no direction.
 constexpr double kMinNormalFraction = 1e-12;
+// Vertices per block of DisplacementVectors::reconstruct's fused pass: on a mesh numbered row by row, a
+// block's face normals (about 2 per vertex, 32 bytes each) take 0.5 MB and stay in L2; the faces on a
+// block's edges are computed twice (about 1/16 more on the 1M bumpy plane).
+constexpr long kFrameBlock = 8192;
 
 // compute_face_normals' work for the face with corners t = (a, b, c): its normal (p_b − p_a) × (p_c − p_a),
 // of length 2 · area, and that length into out[0..3], or zeros for a zero-area face. Written out term by term
@@ -47,8 +51,8 @@ MSD_AVX2 inline __m256d corner_x4(const double* x, const int* F, int c, const lo
 MSD_AVX2 inline __m256d max_x4(__m256d a, __m256d b) {  // std::max(a, b): a < b ? b : a
   return _mm256_blendv_pd(a, b, _mm256_cmp_pd(a, b, _CMP_LT_OQ));
 }
-// face_normal for faces [k0, k1) of `list` (face k when null), four at a time, lane by lane with the same
-// operations (no fused multiply-add), so the same bits; the rows stored by a 4×4 transpose.
+// face_normal for entries [k0, k1) of `list` (face k when null) into out + 4k, four at a time, lane by lane
+// with the same operations (no fused multiply-add), so the same bits; the rows stored by a 4×4 transpose.
 MSD_AVX2 void face_normals_x4(const phong::Columns& X, const int* F, const int* list, long k0, long k1, double* out) {
   long k = k0;
   for (; k + 4 <= k1; k += 4) {
@@ -70,20 +74,18 @@ MSD_AVX2 void face_normals_x4(const phong::Columns& X, const int* F, const int* 
     nx = _mm256_and_pd(nx, area), ny = _mm256_and_pd(ny, area), nz = _mm256_and_pd(nz, area);
     len = _mm256_and_pd(len, area);
     transpose_x4(nx, ny, nz, len);  // now face i's (n, |n|) in the i-th
-    _mm256_storeu_pd(out + 4 * f[0], nx);
-    _mm256_storeu_pd(out + 4 * f[1], ny);
-    _mm256_storeu_pd(out + 4 * f[2], nz);
-    _mm256_storeu_pd(out + 4 * f[3], len);
+    _mm256_storeu_pd(out + 4 * k, nx);
+    _mm256_storeu_pd(out + 4 * k + 4, ny);
+    _mm256_storeu_pd(out + 4 * k + 8, nz);
+    _mm256_storeu_pd(out + 4 * k + 12, len);
   }
-  for (; k < k1; ++k) {
-    const long f = list ? list[k] : k;
-    face_normal(X, F + 3 * f, out + 4 * f);
-  }
+  for (; k < k1; ++k) face_normal(X, F + 3 * (list ? list[k] : k), out + 4 * k);
 }
 
-// VertexFrames' arrays, for the four-vertex loop below.
+// VertexFrames' arrays, for the four-vertex loop below: vertex v's i-th face (face_offsets[v] + i) has its
+// normal at face_normals + 4 · slots[face_offsets[v] + i].
 struct FrameArrays {
-  const int *face_offsets, *incident_faces, *offsets, *neighbours;
+  const int *face_offsets, *slots, *offsets, *neighbours;
   const double* face_normals;
 };
 
@@ -132,7 +134,7 @@ MSD_AVX2 bool reconstruct_local_x4(const FrameArrays& a, const phong::Columns& X
     for (int j = 0; j < most; ++j) {
       __m256d r[4];
       for (int i = 0; i < 4; ++i)
-        r[i] = j < count[i] ? _mm256_loadu_pd(a.face_normals + 4 * a.incident_faces[first[i] + j]) : zero;
+        r[i] = j < count[i] ? _mm256_loadu_pd(a.face_normals + 4 * a.slots[first[i] + j]) : zero;
       transpose_x4(r[0], r[1], r[2], r[3]);
       sx = _mm256_add_pd(sx, r[0]), sy = _mm256_add_pd(sy, r[1]), sz = _mm256_add_pd(sz, r[2]);
       weight = _mm256_add_pd(weight, r[3]);
@@ -197,7 +199,6 @@ VertexFrames::VertexFrames(const Faces& F, int num_vertices) {
   VertexFaces star = vertex_faces(F, num_vertices);
   face_offsets_ = std::move(star.offsets);
   incident_faces_ = std::move(star.faces);
-  face_normals_.resize(4 * F.rows());
   // Every corner lists its two neighbours in winding order; faces are visited in index order.
   std::vector<int> offsets(num_vertices + 1, 0);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
@@ -230,27 +231,21 @@ std::vector<int> VertexFrames::edge_order(int v) const {
   return std::vector<int>(neighbours_.begin() + offsets_[v], neighbours_.begin() + offsets_[v + 1]);
 }
 
-void VertexFrames::compute_face_normals(const phong::Columns& X, const std::vector<int>* faces) const {
-  const long nf = faces ? static_cast<long>(faces->size()) : static_cast<long>(F_.rows());
-  const int* const face_list = faces ? faces->data() : nullptr;
-  double* const face_normals = face_normals_.data();
+void VertexFrames::face_normals(const phong::Columns& X, const int* list, long k0, long k1,
+                                double* out) const {
   const int* const F = F_.data();  // row-major
-  parallel_for_chunks(nf, [&](long begin, long end) {
 #if MSD_HAVE_AVX2_KERNELS
-    if (cpu_has_avx2()) return face_normals_x4(X, F, face_list, begin, end, face_normals);
+  if (cpu_has_avx2()) return face_normals_x4(X, F, list, k0, k1, out);
 #endif
-    for (long k = begin; k < end; ++k) {
-      const long f = face_list ? face_list[k] : k;
-      face_normal(X, F + 3 * f, face_normals + 4 * f);
-    }
-  });
+  for (long k = k0; k < k1; ++k) face_normal(X, F + 3 * (list ? list[k] : k), out + 4 * k);
 }
 
-void VertexFrames::frame(const phong::Columns& X, long v, Vec3& n, Vec3& t1, Vec3& t2) const {
+void VertexFrames::frame(const phong::Columns& X, long v, const int* slots, const double* normals, Vec3& n,
+                         Vec3& t1, Vec3& t2) const {
   Vec3 sum = Vec3::Zero();
   double weight = 0;
   for (int i = face_offsets_[v]; i < face_offsets_[v + 1]; ++i) {
-    const double* fn = face_normals_.data() + 4 * incident_faces_[i];
+    const double* fn = normals + 4 * slots[i];
     sum += Vec3(fn[0], fn[1], fn[2]);
     weight += fn[3];
   }
@@ -291,11 +286,13 @@ void VertexFrames::compute(const Positions& P, Positions& N, Positions& T1, Posi
   if (T1.rows() != nv) T1.resize(nv, 3);
   if (T2.rows() != nv) T2.resize(nv, 3);
   const phong::Columns X(P);
-  compute_face_normals(X, nullptr);
+  std::vector<double> normals(4 * F_.rows());
+  parallel_for_chunks(F_.rows(),
+                      [&](long begin, long end) { face_normals(X, nullptr, begin, end, normals.data()); });
   parallel_for_chunks(nv, [&](long begin, long end) {
     Vec3 n, t1, t2;
     for (long v = begin; v < end; ++v) {
-      frame(X, v, n, t1, t2);
+      frame(X, v, incident_faces_.data(), normals.data(), n, t1, t2);
       N.row(v) = n, T1.row(v) = t1, T2.row(v) = t2;
     }
   });
@@ -323,20 +320,39 @@ void DisplacementVectors::encode(const Positions& S, const Faces& Fs, const Posi
   const int nv = static_cast<int>(B.rows());
   const std::vector<char> placed = placed_mask(nv, where);
   frames_ = VertexFrames(Fb, nv);
-  // The vertices a frame reconstructs (all but the placed ones) and the faces whose normals they read.
+  // The vertices a frame reconstructs (all but the placed ones), in blocks of kFrameBlock consecutive
+  // entries, each block with the list of the faces its frames read (a face on the edge of two blocks is in
+  // both) and each of its vertices' faces as a slot in that list.
   all_vertices_ = placed_.empty();
   frame_vertices_.clear();
-  frame_faces_.clear();
-  if (!all_vertices_) {
-    std::vector<char> read(Fb.rows(), 0);
-    for (int v = 0; v < nv; ++v) {
-      if (placed[v]) continue;
-      frame_vertices_.push_back(v);
-      for (int i = frames_.face_offsets_[v]; i < frames_.face_offsets_[v + 1]; ++i) read[frames_.incident_faces_[i]] = 1;
+  if (!all_vertices_)
+    for (int v = 0; v < nv; ++v)
+      if (!placed[v]) frame_vertices_.push_back(v);
+  const long count = all_vertices_ ? nv : static_cast<long>(frame_vertices_.size());
+  block_face_offsets_.assign(1, 0);
+  block_faces_.clear();
+  face_slots_.assign(frames_.incident_faces_.size(), 0);
+  std::vector<long> block_of(Fb.rows(), -1);
+  std::vector<int> slot_of(Fb.rows());
+  long largest = 0;
+  for (long k0 = 0; k0 < count; k0 += kFrameBlock) {
+    const long first = static_cast<long>(block_faces_.size());
+    for (long k = k0; k < std::min(count, k0 + kFrameBlock); ++k) {
+      const int v = all_vertices_ ? static_cast<int>(k) : frame_vertices_[k];
+      for (int i = frames_.face_offsets_[v]; i < frames_.face_offsets_[v + 1]; ++i) {
+        const int f = frames_.incident_faces_[i];
+        if (block_of[f] != k0) {
+          block_of[f] = k0;
+          slot_of[f] = static_cast<int>(block_faces_.size() - first);
+          block_faces_.push_back(f);
+        }
+        face_slots_[i] = slot_of[f];
+      }
     }
-    for (Eigen::Index f = 0; f < Fb.rows(); ++f)
-      if (read[f]) frame_faces_.push_back(static_cast<int>(f));
+    block_face_offsets_.push_back(static_cast<int>(block_faces_.size()));
+    largest = std::max(largest, static_cast<long>(block_faces_.size()) - first);
   }
+  block_normals_ = tbb::enumerable_thread_specific<std::vector<double>>(std::vector<double>(4 * largest));
   const Positions H = S - B;
   if (options_.frame == DisplacementFrame::Global) {
     coefficients_ = H;
@@ -366,33 +382,45 @@ void DisplacementVectors::reconstruct(const Positions& B_deformed, Positions& ou
   if (options_.frame == DisplacementFrame::Local) {
     // The frames of B' straight into (9.8): no per-frame #V by 3 frame arrays written and read back. The
     // vertices run in chunks on both cores; `finite` gathers their checks.
+    // One fused pass per block: its faces' normals into this thread's buffer, which stays in L2 while the
+    // block's frames read them (no #F by 4 array written and read back).
     const phong::Columns b(B_deformed);
     const int* const list = all_vertices_ ? nullptr : frame_vertices_.data();
     const long count = all_vertices_ ? nv : static_cast<long>(frame_vertices_.size());
-    frames_.compute_face_normals(b, all_vertices_ ? nullptr : &frame_faces_);
-    const auto one = [&](long v) {  // p' of vertex v; false where it is not finite
-      Vec3 n, t1, t2;
-      frames_.frame(b, v, n, t1, t2);
-      const Vec3 p = b.row(v) + (c[v] * n + c[nv + v] * t1 + c[2 * nv + v] * t2);
-      o[v] = p.x(), o[nv + v] = p.y(), o[2 * nv + v] = p.z();
-      return (p.x() - p.x()) + (p.y() - p.y()) + (p.z() - p.z()) == 0;
-    };
-    parallel_for_chunks(count, [&](long begin, long end) {
-      bool ok = true;
+    const long blocks = static_cast<long>(block_face_offsets_.size()) - 1;
+    parallel_for_chunks(
+        blocks,
+        [&](long first_block, long end_block) {
+          double* const normals = block_normals_.local().data();
+          const auto one = [&](long v) {  // p' of vertex v; false where it is not finite
+            Vec3 n, t1, t2;
+            frames_.frame(b, v, face_slots_.data(), normals, n, t1, t2);
+            const Vec3 p = b.row(v) + (c[v] * n + c[nv + v] * t1 + c[2 * nv + v] * t2);
+            o[v] = p.x(), o[nv + v] = p.y(), o[2 * nv + v] = p.z();
+            return (p.x() - p.x()) + (p.y() - p.y()) + (p.z() - p.z()) == 0;
+          };
+          bool ok = true;
+          for (long block = first_block; block < end_block; ++block) {
+            const long begin = block * kFrameBlock, end = std::min(count, begin + kFrameBlock);
+            const int f0 = block_face_offsets_[block];
+            frames_.face_normals(b, block_faces_.data() + f0, 0, block_face_offsets_[block + 1] - f0,
+                                 normals);
 #if MSD_HAVE_AVX2_KERNELS
-      if (cpu_has_avx2()) {
-        const FrameArrays arrays{frames_.face_offsets_.data(), frames_.incident_faces_.data(),
-                                 frames_.offsets_.data(), frames_.neighbours_.data(),
-                                 frames_.face_normals_.data()};
-        const auto scalar = [](const void* one_vertex, long v) {
-          return (*static_cast<const decltype(one)*>(one_vertex))(v);
-        };
-        ok = reconstruct_local_x4(arrays, b, c, nv, o, list, begin, end, scalar, &one);
-      } else
+            if (cpu_has_avx2()) {
+              const FrameArrays arrays{frames_.face_offsets_.data(), face_slots_.data(),
+                                       frames_.offsets_.data(), frames_.neighbours_.data(), normals};
+              const auto scalar = [](const void* one_vertex, long v) {
+                return (*static_cast<const decltype(one)*>(one_vertex))(v);
+              };
+              ok &= reconstruct_local_x4(arrays, b, c, nv, o, list, begin, end, scalar, &one);
+              continue;
+            }
 #endif
-        for (long k = begin; k < end; ++k) ok &= one(list ? list[k] : k);
-      if (!ok) finite.store(false, std::memory_order_relaxed);
-    });
+            for (long k = begin; k < end; ++k) ok &= one(list ? list[k] : k);
+          }
+          if (!ok) finite.store(false, std::memory_order_relaxed);
+        },
+        1);
   } else {
     parallel_for_chunks(nv, [&](long begin, long end) {
       double check = 0;

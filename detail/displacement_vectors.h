@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include "msdeform/core/types.h"
 #include "msdeform/detail/encoding.h"
 
@@ -27,8 +29,8 @@ struct Columns;
 //! - If every incident edge is skipped: t1 is the world axis least aligned with n, projected into the
 //!   tangent plane (not rotation-equivariant, but defined). A vertex without normal (no incident face of
 //!   positive area) gets the world frame (n, t1, t2) = (z, x, y): its detail is kept in world coordinates.
-//! Frames are a function of positions only; compute() is O(#V + #F), parallel, allocation-free once the
-//! outputs are sized.
+//! Frames are a function of positions only; compute() is O(#V + #F), parallel (it allocates #F by 4
+//! doubles for the face normals).
 class VertexFrames {
  public:
   VertexFrames() = default;
@@ -43,15 +45,17 @@ class VertexFrames {
 
  private:
   friend class DisplacementVectors;  // reconstructs from each frame as it is computed
-  //! A frame's first pass: the normals of `faces` (all when null) at positions X into face_normals_.
-  void compute_face_normals(const phong::Columns& X, const std::vector<int>* faces) const;
-  //! Its second pass: the frame of vertex v at X, from face_normals_ (which must hold its faces').
-  void frame(const phong::Columns& X, long v, Vec3& n, Vec3& t1, Vec3& t2) const;
+  //! A frame's first pass: for entries [k0, k1) of `list` (face k when null), the face's normal at
+  //! positions X (length 2 · area) and its length into out[4k .. 4k + 3] (zeros for a zero-area face).
+  void face_normals(const phong::Columns& X, const int* list, long k0, long k1, double* out) const;
+  //! Its second pass: the frame of vertex v at X, its i-th face's normal (incident_faces_[face_offsets_[v] +
+  //! i]) read at normals + 4 · slots[face_offsets_[v] + i].
+  void frame(const phong::Columns& X, long v, const int* slots, const double* normals, Vec3& n, Vec3& t1,
+             Vec3& t2) const;
 
   Faces F_;
   std::vector<int> face_offsets_{0}, incident_faces_;  // CSR: faces around each vertex
   std::vector<int> offsets_{0}, neighbours_;           // CSR: ordered, distinct neighbours of each vertex
-  mutable std::vector<double> face_normals_;  // per-frame buffer, 4 per face: the normal (length 2 · area), its length
 };
 
 //! Where the displacement vectors live.
@@ -96,9 +100,14 @@ class DisplacementVectors : public DetailEncoding {
   VertexFrames frames_;
   bool encoded_ = false;
   Eigen::MatrixX3d coefficients_;
-  // With placed vertices: the vertices a frame reconstructs and the faces around them (local frames).
+  // With placed vertices: the vertices a frame reconstructs (all when all_vertices_).
   bool all_vertices_ = true;
-  std::vector<int> frame_vertices_, frame_faces_;
+  std::vector<int> frame_vertices_;
+  // Local frames: those vertices in blocks (kFrameBlock consecutive entries); block k reads the normals of
+  // faces block_faces_[block_face_offsets_[k] ..], which a frame computes into this thread's buffer, and
+  // the i-th incident face of VertexFrames (incident_faces_[i]) at slot face_slots_[i] of its block's list.
+  std::vector<int> block_face_offsets_, block_faces_, face_slots_;
+  tbb::enumerable_thread_specific<std::vector<double>> block_normals_;
 };
 
 }  // namespace msd

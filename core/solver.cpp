@@ -192,7 +192,9 @@ struct SparseSPDSolver::Impl {
                                                         : "SparseSPDSolver: factorisation failed (CHOLMOD status " +
                                                               std::to_string(status) + ")");
     }
-    if (!substitution.planned() && substitution.plan(L)) {  // a refactorisation keeps the structure
+    if (substitution.planned()) {  // a refactorisation keeps the structure, not the values' copy
+      substitution.refresh_values();
+    } else if (substitution.plan(L)) {
       const long* perm = substitution.ordering();
       ordering.assign(perm, perm + n);
     }
@@ -202,6 +204,7 @@ struct SparseSPDSolver::Impl {
     if (substitution.planned()) return substitution.solve_ordered(Y, k);
     solve_rows(*this, Y, k, n);
   }
+  void set_single_precision_solves(bool on) { substitution.set_single_precision(on); }
   void solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& Xout) const {
     if (substitution.planned() && B.cols() >= 1 && B.cols() <= SupernodalSubstitution::kMaxColumns) {
       if (Xout.rows() != B.rows() || Xout.cols() != B.cols()) Xout.resize(B.rows(), B.cols());
@@ -295,6 +298,7 @@ struct SparseSPDSolver::Impl {
   }
   void solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X) const { X = ldlt.solve(B); }
   void solve_ordered(double* Y, int k) const { solve_rows(*this, Y, k, n); }
+  void set_single_precision_solves(bool) {}  // the Eigen backend solves in double
   double factor_nonzeros() const { return ok ? static_cast<double>(ldlt.matrixL().nestedExpression().nonZeros()) + n : 0; }
   void release() {
     ok = false;
@@ -342,6 +346,7 @@ int SparseSPDSolver::size() const { return impl_ ? impl_->n : 0; }
 double SparseSPDSolver::factor_nonzeros() const { return impl_ ? impl_->factor_nonzeros() : 0; }
 double SparseSPDSolver::analyse_seconds() const { return impl_ ? impl_->analyse_seconds : 0; }
 double SparseSPDSolver::numeric_seconds() const { return impl_ ? impl_->numeric_seconds : 0; }
+void SparseSPDSolver::set_single_precision_solves(bool on) { impl_->set_single_precision_solves(on); }
 
 void SparseSPDSolver::solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X) const {
   if (!factored()) throw UsageError("SparseSPDSolver::solve: call factor() first");

@@ -47,7 +47,18 @@ class SupernodalSubstitution {
   //! Share of the factor's entries in the two parallel subtrees (the rest is solved on one thread).
   double parallel_share() const { return parallel_share_; }
 
+  //! Solves read a single-precision copy of the factor's values (half the bytes; arithmetic stays in
+  //! double), made now and by refresh_values(): the solve is then exact for a factor whose entries are
+  //! rounded to float, i.e. for a nearby positive definite matrix, a relative error of about κ · 6e-8 in
+  //! the result: for a preconditioner, not for an answer. Off by default.
+  void set_single_precision(bool on);
+  //! Copies the factor's values again after a numeric refactorisation (nothing unless single precision).
+  void refresh_values();
+
  private:
+  template <class T>
+  void solve_with(const T* values, double* Y) const;
+
   const cholmod_factor_struct* L_ = nullptr;
   std::vector<long> group_[2], top_;  // supernodes of the two subtree groups and of the rest, ascending
   std::vector<int> top_slot_;         // column → its row in the top buffers, -1 outside the top
@@ -56,6 +67,8 @@ class SupernodalSubstitution {
   // Workspace: the permuted right-hand sides (4 per row), one supernode's rows below its diagonal per
   // thread, and each group's updates to top rows.
   mutable std::vector<double> y_, w_[3], top_update_[2];
+  bool single_ = false;
+  std::vector<float> values_f_;  // the factor's values in single precision, when single_
 };
 
 }  // namespace msd

@@ -84,10 +84,14 @@ void add_decompose_command(CLI::App& app) {
         break;
       default:
         if (report.low_pass.detail_scale > 0)
-          std::printf("  base: low-pass at detail scale %.10g (%s; mean edge length %.4g)\n",
-                      report.low_pass.detail_scale,
-                      report.low_pass.automatic ? "chosen automatically" : "given",
-                      report.low_pass.mean_edge_length);
+          std::printf(
+              "  base: low-pass at detail scale %.10g (%s; mean edge length %.4g; %s)\n",
+              report.low_pass.detail_scale, report.low_pass.automatic ? "chosen automatically" : "given",
+              report.low_pass.mean_edge_length,
+              report.low_pass.iterations > 0 ? ("solved by conjugate gradients, " +
+                                                std::to_string(report.low_pass.iterations) + " iterations")
+                                                   .c_str()
+                                             : "solved by factorisation");
         else
           std::printf("  base: the mesh itself, no separate detail layer: %s%s\n",
                       report.low_pass.no_layer_reason.c_str(),

@@ -209,3 +209,66 @@ TEST_CASE("low-pass base: a scale that makes the system singular is named as too
     CHECK_THAT(e.what(), Contains("times the mesh's diameter") && !Contains("degenerate faces"));
   }
 }
+
+TEST_CASE(
+    "low-pass base: conjugate gradients give the factorisation's base on planes, tubes and closed scans",
+    "[decomposition][low-pass]") {
+  struct Case {
+    std::string name;
+    Positions P;
+    Faces F;
+    double detail_scale;
+  };
+  std::vector<Case> cases;
+  SceneOptions o;
+  o.resolution = 6000;
+  for (const char* name : {"lift", "bend120"}) {
+    const Scene s = make_scene(name, o);
+    cases.push_back({name, s.P, s.F, 0.3});
+  }
+  const Mesh armadillo = load_mesh(test::cgal_mesh("armadillo.off"));  // closed: no known vertex
+  cases.push_back({"armadillo", positions(armadillo), faces(armadillo), 8});
+  for (const Case& c : cases) {
+    INFO(c.name);
+    LowPassOptions options;
+    options.detail_scale = c.detail_scale;
+    options.solver = LowPassSolver::Factorisation;
+    LowPassReport factored, iterated;
+    const Positions B = low_pass_base(c.P, c.F, options, &factored);
+    options.solver = LowPassSolver::ConjugateGradients;
+    const Positions B_cg = low_pass_base(c.P, c.F, options, &iterated);
+    CHECK(factored.iterations == 0);
+    CHECK(iterated.iterations >= 5);  // κ ≤ 2: 15–17 to 1e-13
+    CHECK(iterated.iterations <= 25);
+    CHECK(test::max_row_distance(B, B_cg) <= 1e-9 * bounding_box_diagonal(c.P));
+  }
+  // The automatic choice picks the same scale either way.
+  const Scene plane = make_scene("lift", o);
+  LowPassOptions automatic;
+  LowPassReport factored, iterated;
+  automatic.solver = LowPassSolver::Factorisation;
+  low_pass_base(plane.P, plane.F, automatic, &factored);
+  automatic.solver = LowPassSolver::ConjugateGradients;
+  low_pass_base(plane.P, plane.F, automatic, &iterated);
+  CHECK(factored.detail_scale > 0);
+  CHECK(iterated.detail_scale == factored.detail_scale);
+}
+
+TEST_CASE("low-pass base: detail heights at rounding level are no detail layer, whichever solver",
+          "[decomposition][low-pass]") {
+  // bend120's smooth tube before its bumps: every candidate removes 1e-16..1e-13 (the rounding of the solve).
+  // Those heights grew with L under the factorisation and stayed flat under conjugate gradients, which read
+  // the flat noise as a plateau at L = 0.08 and made a "detail layer" of it.
+  SceneOptions o;
+  o.resolution = 6000;
+  const Scene tube = make_scene("bend120", o);
+  for (LowPassSolver solver : {LowPassSolver::Factorisation, LowPassSolver::ConjugateGradients}) {
+    LowPassOptions options;
+    options.solver = solver;
+    LowPassReport report;
+    const Positions B = low_pass_base(tube.smooth, tube.F, options, &report);
+    CHECK(report.detail_scale == 0);
+    CHECK_THAT(report.no_layer_reason, Contains("removes nothing measurable"));
+    CHECK(B == tube.smooth);
+  }
+}

@@ -19,6 +19,12 @@ void retain_freed_memory() {
   mallopt(M_TOP_PAD, 256 << 20);          // ... and grow it in 256 MiB steps.
 }
 
+void release_freed_memory() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
+}
+
 std::string out_of_memory_message(const std::string& what) {
   rlimit limit;
   if (what.find("out of memory") == std::string::npos || what.find("ulimit") != std::string::npos ||

@@ -22,6 +22,13 @@ std::uint64_t physical_memory();
 //! own (Python scripts may, with msdeform.retain_freed_memory()).
 void retain_freed_memory();
 
+//! Returns the pages of freed heap memory to the system (glibc's malloc_trim; nothing elsewhere), also in
+//! the middle of the heap, where retain_freed_memory() keeps them. For the end of a phase whose large
+//! temporaries the next phase cannot reuse in place: after the low-pass base (low_pass.cpp), the holes
+//! its factor left below B stayed resident while the shell factored beside them (the 6.5M lift's
+//! multi-scale prepare peaked at 19.9 GB). Costs a walk of the heap and the page faults of reusing them.
+void release_freed_memory();
+
 //! An error message `what`; where it says "out of memory" under an address-space limit it does not name,
 //! followed by " under the address-space limit (ulimit -v) of N MB: raise the limit" (the likelier cause
 //! than the machine's memory).

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <utility>
 
@@ -11,6 +12,7 @@
 #include "msdeform/core/errors.h"
 #include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
+#include "msdeform/core/memory.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/core/solver.h"
 
@@ -288,7 +290,8 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
                        format_number(size) + " (mesh units); a detail scale is a feature length on the mesh");
   LowPassReport r;
   r.mean_edge_length = mean_edge_length(S, F);
-  LowPassSystem system(S, F, options.solver);
+  auto owned = std::make_unique<LowPassSystem>(S, F, options.solver);
+  LowPassSystem& system = *owned;
   Positions B;
   if (system.all_known()) {  // no detail layer: the base is S
     r.all_boundary = true;
@@ -368,6 +371,8 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
       r.check = check_details(S, B, F);
     }
   }
+  owned.reset();
+  release_freed_memory();  // the factor's holes below B: the shell factors next (core/memory.h)
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (report) *report = std::move(r);
   return B;

@@ -16,7 +16,8 @@ namespace msd::cli {
 // Checks that an option is a finite length >= 0, naming the option.
 CLI::Validator nonnegative_length();
 
-// --base, --detail-scale, --fairing and --remesh-base: how the multi-scale base is computed (deform,
+// --base, --detail-scale, --low-pass-solver, --fairing and --remesh-base: how the multi-scale base is
+// computed (deform,
 // compare, decompose). Call resolve_decomposition() after parsing.
 struct DecompositionArgs {
   DecompositionOptions options;
@@ -25,6 +26,7 @@ struct DecompositionArgs {
   CLI::Option* remesh_option = nullptr;
   CLI::Option* scale_option = nullptr;
   CLI::Option* fairing_option = nullptr;
+  CLI::Option* solver_option = nullptr;
   // Whether any of these options was given (they apply to multi-scale methods only).
   bool given() const;
   void add_to(CLI::App& cmd);

@@ -190,6 +190,10 @@ const Choices<msd::DecompositionKind> kBases = {{"low-pass", msd::DecompositionK
                                                 {"fairing", msd::DecompositionKind::Fairing},
                                                 {"remeshed", msd::DecompositionKind::Remeshed},
                                                 {"subdivision", msd::DecompositionKind::Subdivision}};
+const Choices<msd::LowPassSolver> kLowPassSolvers = {
+    {"auto", msd::LowPassSolver::Automatic},
+    {"factorisation", msd::LowPassSolver::Factorisation},
+    {"conjugate-gradients", msd::LowPassSolver::ConjugateGradients}};
 const Choices<msd::FairingOrder> kFairings = {{"membrane", msd::FairingOrder::Membrane},
                                               {"thin-plate", msd::FairingOrder::ThinPlate},
                                               {"minimum-variation", msd::FairingOrder::MinimumVariation}};
@@ -402,6 +406,17 @@ const std::vector<Option>& options_table() {
                                       [](auto& s, const std::string&) -> auto& {
                                         return s.decomposition.low_pass.detail_scale;
                                       }),
+                          [](const MethodSettings& s, const std::string&) {
+                            return !msd::reads_detail_scale(s.decomposition.kind);
+                          }));
+    t.push_back(none_when(choice_option(
+                              "low_pass_solver", {"multiscale"},
+                              "how the low-pass base's system is solved: 'auto' uses conjugate gradients "
+                              "from 500k unknowns (faster there, half the memory) and a factorisation "
+                              "below; None (its value with a fairing or subdivision base): unset",
+                              kLowPassSolvers, [](auto& s, const std::string&) -> auto& {
+                                return s.decomposition.low_pass.solver;
+                              }),
                           [](const MethodSettings& s, const std::string&) {
                             return !msd::reads_detail_scale(s.decomposition.kind);
                           }));
@@ -640,6 +655,11 @@ PyDeformer::PyDeformer(const std::string& name, const py::kwargs& options) : met
   if (was_given("detail_scale") && !msd::reads_detail_scale(settings.decomposition.kind))
     throw py::value_error("Deformer('" + method + "'): detail_scale applies to the low-pass and remeshed bases, not "
                           "base='" + msd::to_string(settings.decomposition.kind) + "'");
+  if (was_given("low_pass_solver") && !msd::reads_detail_scale(settings.decomposition.kind))
+    throw py::value_error("Deformer('" + method +
+                          "'): low_pass_solver applies to the low-pass and remeshed bases, "
+                          "not base='" +
+                          msd::to_string(settings.decomposition.kind) + "'");
   if (was_given("geodesic_time_factor") && settings.propagation.field != msd::PropagationField::Geodesic)
     throw py::value_error("Deformer('" + method + "'): geodesic_time_factor applies to field='geodesic', not field='" +
                           choice_label(settings.propagation.field, kFields).cast<std::string>() + "'");

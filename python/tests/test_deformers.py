@@ -226,6 +226,20 @@ def test_unknown_method_and_options_are_refused_by_name():
         msdeform.Deformer("multiscale-normal", fairing=2)
     with pytest.raises(ValueError, match="detail_scale applies to the low-pass and remeshed bases, not base='fairing'"):
         msdeform.Deformer("multiscale-normal", base="fairing", detail_scale=0.3)
+    with pytest.raises(ValueError, match="low_pass_solver applies to the low-pass and remeshed bases, not base='fairing'"):
+        msdeform.Deformer("multiscale-normal", base="fairing", low_pass_solver="factorisation")
+    with pytest.raises(ValueError, match="low_pass_solver must be one of 'auto', 'factorisation', 'conjugate-gradients'"):
+        msdeform.Deformer("multiscale-normal", low_pass_solver="cholesky")
+    assert msdeform.Deformer("multiscale-normal").options["low_pass_solver"] == "auto"
+    assert msdeform.Deformer("multiscale-normal", base="fairing").options["low_pass_solver"] is None
+    # Both solvers give the same base (to 1e-9 of the diagonal; the test of low_pass_base checks it closely).
+    lift = msdeform.scene("lift", 2000)
+    outs = []
+    for solver in ("factorisation", "conjugate-gradients"):
+        d = msdeform.Deformer("multiscale-normal", detail_scale=0.3, low_pass_solver=solver)
+        d.prepare(lift.V, lift.F, lift.labels)
+        outs.append(d.deform(lift.transforms))
+    assert np.abs(outs[0] - outs[1]).max() < 1e-8
     with pytest.raises(ValueError, match="geodesic_time_factor applies to field='geodesic', not field='harmonic'"):
         msdeform.Deformer("propagate", geodesic_time_factor=2)
     with pytest.raises(ValueError, match="geodesic_time_factor applies to field='geodesic'"):

@@ -100,6 +100,14 @@ expect_error 1 "--fairing applies to --base fairing, not --base low-pass" \
   "$msdeform" deform --scene lift --method multiscale --fairing 3 -o x.off
 expect_error 1 "--detail-scale applies to --base low-pass or remeshed, not --base fairing" \
   "$msdeform" deform --scene lift --method multiscale --base fairing --detail-scale 0.5 -o x.off
+expect_error 1 "--low-pass-solver applies to --base low-pass or remeshed, not --base fairing" \
+  "$msdeform" deform --scene lift --method multiscale --base fairing --low-pass-solver factorisation -o x.off
+expect_error 2 "--low-pass-solver" "$msdeform" decompose --scene lift --low-pass-solver cholesky -o x.ply
+# Either solver gives the base, and decompose says which ran.
+"$msdeform" decompose --scene lift --resolution 2000 --detail-scale 0.3 --low-pass-solver conjugate-gradients \
+  -o cg.ply | grep -q "solved by conjugate gradients, [0-9]* iterations" || fail "decompose does not say CG ran"
+"$msdeform" decompose --scene lift --resolution 2000 --detail-scale 0.3 -o lu.ply |
+  grep -q "solved by factorisation" || fail "decompose does not say the factorisation ran"
 # A reference that is not compared is refused before the output folder is made.
 expect_error 1 "the reference method 'arap' is not among the compared methods" \
   "$msdeform" compare --scenes lift --methods shell --reference arap -o cmp-noref

@@ -29,9 +29,12 @@ constexpr double kDefectFraction = 1e-3;
 // Automatic scale: a base with less than this fraction of S's area has lost the shape (a tube smoothed
 // towards its axis), whatever its details look like.
 constexpr double kMinAreaRatio = 0.5;
-// Automatic scale: an rms detail height below this fraction of the diameter is rounding (of the solve, at
-// 1e-13 of the coordinates, and of S itself), not a layer: a plateau must start above it.
+// Automatic scale: an rms detail height below this fraction of the diameter, or below this many units in the
+// last place of S's largest coordinate, is rounding (of the solve, at 1e-13 of the coordinates, and of S
+// itself: a plane 1 across moved to 1e7 shows rms heights of 2.4e-10), not a layer: a plateau must start
+// above it.
 constexpr double kNoiseHeight = 1e-10;
+constexpr double kNoiseUlps = 16;
 // A given detail scale above this many diameters of S is refused (see low_pass_base).
 constexpr double kMaxScaleOverDiameter = 1e6;
 // The iterative solve (LowPassSystem::solve_iteratively) stops when every coordinate's residual, in the
@@ -39,8 +42,6 @@ constexpr double kMaxScaleOverDiameter = 1e6;
 // factored instead) after kMaxIterations, which the preconditioner's bound κ ≤ 2 never needs (about 17).
 constexpr double kTolerance = 1e-13;
 constexpr int kMaxIterations = 60;
-// LowPassSolver::Automatic: conjugate gradients from this many unknowns (see low_pass.h).
-constexpr size_t kIterativeFrom = 500000;
 
 // Y = A X for a symmetric A (n by n, both triangles stored), X n by 3: each row of Y is a column of A
 // times X (A's columns are its rows), so rows run on both cores without sharing a write.
@@ -100,12 +101,14 @@ class LowPassSystem {
     if (unknown_.empty()) return;  // every vertex on the boundary: B = S, no system to build
     mass_u_.resize(static_cast<Eigen::Index>(unknown_.size()));
     inverse_u_.resize(mass_u_.size());
-    iterative_ = solver == LowPassSolver::ConjugateGradients ||
-                 (solver == LowPassSolver::Automatic && unknown_.size() >= kIterativeFrom);
+    iterative_ = solver != LowPassSolver::Factorisation;
     for (size_t u = 0; u < unknown_.size(); ++u) {
       mass_u_[u] = mass_[unknown_[u]];
       inverse_u_[u] = inverse[unknown_[u]];
-      iterative_ = iterative_ && inverse_u_[u] > 0;
+      if (iterative_ && !(inverse_u_[u] > 0)) {
+        iterative_ = false;
+        fallback_reason_ = "vertex " + std::to_string(unknown_[u]) + " has no area (its faces have none)";
+      }
     }
     W_uu_ = submatrix(lap.W, unknown_, unknown_);
     if (!known_.empty()) W_uk_ = submatrix(lap.W, unknown_, known_);
@@ -188,7 +191,7 @@ class LowPassSystem {
   void precondition(const Eigen::MatrixX3d& R, Eigen::MatrixX3d& Z) {
     Eigen::MatrixXd T = R;
     preconditioner_.solve(T, T);
-    T.array().colwise() *= mass_u_.array();
+    T.array().colwise() *= mass_u_.array() / (scale_ * scale_);
     preconditioner_.solve(T, T);
     Z = T;
   }
@@ -198,8 +201,11 @@ class LowPassSystem {
   // wherever the cotan weights are, see cotan_laplacian), a non-finite value, or no convergence within
   // kMaxIterations; the caller then factors A.
   bool solve_iteratively(double l2, Eigen::MatrixX3d& X) {
-    SparseMatrix C = -l2 * W_uu_;
-    for (Eigen::Index u = 0; u < C.cols(); ++u) C.coeffRef(u, u) += mass_u_[u];
+    // C / s with s the mean mass: entries of order 1 + ℓ²μ at any size of S, within single precision's
+    // range (C itself overflows it beyond coordinates of about 1e19); precondition() divides D by s².
+    scale_ = mass_u_.mean();
+    SparseMatrix C = (-l2 / scale_) * W_uu_;
+    for (Eigen::Index u = 0; u < C.cols(); ++u) C.coeffRef(u, u) += mass_u_[u] / scale_;
     try {
       if (preconditioner_.factored())
         preconditioner_.refactor(C);
@@ -207,8 +213,8 @@ class LowPassSystem {
         preconditioner_.set_single_precision_solves(true);  // a preconditioner: see the class comment
         preconditioner_.factor(std::move(C));
       }
-    } catch (const SolverError&) {
-      iterative_ = false;
+    } catch (const SolverError& e) {
+      give_up(std::string("the preconditioner could not be factored (") + e.what() + ")");
       return false;
     }
     const Eigen::Index n = static_cast<Eigen::Index>(unknown_.size());
@@ -239,22 +245,43 @@ class LowPassSystem {
       R -= Q * alpha.matrix().asDiagonal();
       precondition(R, Z);
       const Eigen::Array3d next = (R.array() * Z.array()).colwise().sum().transpose();
-      if (!next.allFinite()) break;
+      if (!next.allFinite()) {
+        give_up("a non-finite residual after " + std::to_string(it + 1) + " iterations");
+        return false;
+      }
       const Eigen::Array3d beta = (rz > 0).select(next / rz, 0.0);
       P = Z + P * beta.matrix().asDiagonal();
       rz = next;
     }
-    iterative_ = false;  // did not converge: factor A from now on
+    char why[160];
+    std::snprintf(why, sizeof why, "no convergence in %d iterations (residual %.3g of the right-hand side's)",
+                  kMaxIterations, std::sqrt((rz / target.max(1e-300)).maxCoeff()) * kTolerance);
+    give_up(why);
     return false;
   }
 
+  // Conjugate gradients do not apply: A is factored from now on, and the preconditioner's memory released.
+  void give_up(const std::string& why) {
+    iterative_ = false;
+    fallback_reason_ = why;
+    preconditioner_ = SparseSPDSolver();
+    release_freed_memory();
+  }
+
+ public:
+  //! Why conjugate gradients were asked for (LowPassSolver) and the system was factored; empty otherwise.
+  const std::string& fallback_reason() const { return fallback_reason_; }
+
+ private:
   Eigen::VectorXd mass_;
   SparseMatrix W_, W_uu_, W_uk_;  // the cotan Laplacian, its blocks (unknown, unknown), (unknown, known)
   Eigen::VectorXd inverse_, inverse_u_;  // M̃⁻¹ (0 on the boundary and without area), on the unknowns
   SparseMatrix bending_uu_, bending_uk_;  // W M̃⁻¹ W on (unknown, unknown), (unknown, known): factored path
   bool iterative_ = false;                // conjugate gradients (LowPassSolver), while they apply
   int iterations_ = 0;
-  SparseSPDSolver preconditioner_;  // C = D − ℓ²W
+  std::string fallback_reason_;
+  double scale_ = 1;                // the mean mass s: the preconditioner factors C / s
+  SparseSPDSolver preconditioner_;  // C / s, C = D − ℓ²W
   Eigen::MatrixX3d work_;
   Eigen::VectorXd mass_u_;                // M on the unknowns
   Vec3 centroid_;
@@ -308,6 +335,8 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
     r.automatic = true;
     const double size = diameter(S), smallest = 4 * r.mean_edge_length,
                  largest = options.max_scale_fraction * size;
+    const double noise = std::max(
+        kNoiseHeight * size, kNoiseUlps * std::numeric_limits<double>::epsilon() * S.cwiseAbs().maxCoeff());
     const double area = face_areas(S, F).sum();
     const long allowed_folds = static_cast<long>(kDefectFraction * static_cast<double>(S.rows()));
     double previous_rms = 0;
@@ -348,8 +377,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
                             ") before the detail heights stopped growing";
         break;
       }
-      if (k > 0 && previous_rms > kNoiseHeight * size &&
-          check.rms_height < options.plateau_growth * previous_rms) {
+      if (k > 0 && previous_rms > noise && check.rms_height < options.plateau_growth * previous_rms) {
         r.detail_scale = L;
         r.check = check;
         B.swap(trial);
@@ -358,8 +386,15 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
       previous_rms = check.rms_height;
     }
     if (r.detail_scale == 0) {  // no separate detail layer: the base is S itself
-      if (r.no_layer_reason.empty() && !r.candidates.empty() &&
-          r.candidates.back().check.rms_height <= kNoiseHeight * size)
+      if (r.candidates.size() < 2 && r.no_layer_reason.empty())  // no growth to judge
+        r.no_layer_reason =
+            r.candidates.empty()
+                ? "no candidate scale fits the mesh (the smallest, 4 mean edge lengths = " +
+                      format_number(smallest) + ", is beyond " + format_number(options.max_scale_fraction) +
+                      " of its diameter " + format_number(size) + ")"
+                : "only one candidate scale fits the mesh (" + format_number(smallest) + ", up to " +
+                      format_number(options.max_scale_fraction) + " of its diameter): a plateau needs two";
+      if (r.no_layer_reason.empty() && !r.candidates.empty() && r.candidates.back().check.rms_height <= noise)
         r.no_layer_reason = "the low-pass removes nothing measurable at any scale tried (up to " +
                             format_number(options.max_scale_fraction) +
                             " of the diameter; rms detail height " +
@@ -371,6 +406,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
       r.check = check_details(S, B, F);
     }
   }
+  r.solver_fallback = system.fallback_reason();
   owned.reset();
   release_freed_memory();  // the factor's holes below B: the shell factors next (core/memory.h)
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -30,17 +30,17 @@ namespace msd {
 
 //! How the smoothing system (M + ℓ⁴ W M̃⁻¹ W) B = M S is solved.
 enum class LowPassSolver {
-  //! Conjugate gradients from 500k unknowns (vertices off the mesh boundary), where they are as fast as
-  //! the factorisation (590k-vertex lift: 4.0 vs 3.9 s) and faster above it (1M: 7.4 vs 9.1 s) in less
-  //! than half its memory (1.8 vs 3.7 GB); the factorisation below.
-  Automatic,
+  //! Conjugate gradients preconditioned with C D⁻¹ C, C = D − ℓ²W (condition number at most 2 on any mesh
+  //! and at any scale, 15–17 iterations to 1e-13; low_pass.cpp), factoring only C, which has the
+  //! Laplacian's sparsity: less than half the factorisation's memory (1M lift: 1.8 vs 3.7 GB), faster on
+  //! large meshes (1M: 7.4 vs 9.1 s), slower on mid-size ones (the 200k lift's automatic scale: 7.5 vs
+  //! 5.6 s), and right where the factorisation fails (a closed piece far smaller than the detail scale,
+  //! a vertex of valence 8000, scales far beyond the mesh). Needs every unknown to have area; where one
+  //! has none, the preconditioner cannot be factored or the iteration does not converge, the system is
+  //! factored instead and LowPassReport::solver_fallback says why.
+  ConjugateGradients,
   //! A sparse Cholesky factorisation of the system (about 220 entries per unknown on the 1M lift).
   Factorisation,
-  //! Conjugate gradients preconditioned with C D⁻¹ C, C = D − ℓ²W (condition number at most 2, about 16
-  //! iterations to 1e-13; low_pass.cpp), factoring only C, which has the Laplacian's sparsity. Needs every
-  //! unknown to have area; where it does not, C is not positive definite or it does not converge, the
-  //! system is factored instead.
-  ConjugateGradients,
 };
 
 struct LowPassOptions {
@@ -58,7 +58,7 @@ struct LowPassOptions {
   //! fraction of the diameter of S (twice the largest distance from the centroid: unlike the bounding
   //! box, it does not change when S turns). > 0.
   double max_scale_fraction = 0.6;
-  LowPassSolver solver = LowPassSolver::Automatic;
+  LowPassSolver solver = LowPassSolver::ConjugateGradients;
 };
 
 //! One scale the automatic choice evaluated.
@@ -85,6 +85,9 @@ struct LowPassReport {
   //! Conjugate-gradient iterations of the last system solved (the returned base's, or the last candidate's
   //! of the automatic choice); 0 where it was factored (LowPassSolver).
   int iterations = 0;
+  //! Why conjugate gradients gave way to the factorisation (LowPassSolver); empty when they ran, or when
+  //! the factorisation was asked for.
+  std::string solver_fallback;
   bool reused = false;  //!< taken from a LowPassCache: computed by an earlier call with the same S, F and options
 };
 

@@ -91,7 +91,11 @@ void add_decompose_command(CLI::App& app) {
               report.low_pass.iterations > 0 ? ("solved by conjugate gradients, " +
                                                 std::to_string(report.low_pass.iterations) + " iterations")
                                                    .c_str()
-                                             : "solved by factorisation");
+              : report.low_pass.solver_fallback.empty()
+                  ? "solved by factorisation"
+                  : ("solved by factorisation: conjugate gradients gave way, " +
+                     report.low_pass.solver_fallback)
+                        .c_str());
         else
           std::printf("  base: the mesh itself, no separate detail layer: %s%s\n",
                       report.low_pass.no_layer_reason.c_str(),

@@ -57,16 +57,16 @@ void DecompositionArgs::add_to(CLI::App& cmd) {
   solver_option =
       cmd.add_option(
              "--low-pass-solver", options.low_pass.solver,
-             "how the low-pass base's system is solved: auto (conjugate gradients from 500k unknowns, "
-             "where they are faster and take half the memory; a factorisation below), factorisation, or "
-             "conjugate-gradients (preconditioned, condition number <= 2; results agree to 1e-9)")
+             "how the low-pass base's system is solved: conjugate-gradients (preconditioned, condition "
+             "number <= 2; half the memory of a factorisation, and right where it fails: a closed piece far "
+             "smaller than the detail scale, a vertex of thousands of neighbours; the factorisation where "
+             "they "
+             "do not apply, e.g. a vertex without area) or factorisation")
           ->transform(CLI::CheckedTransformer(
-              std::map<std::string, LowPassSolver>{
-                  {"auto", LowPassSolver::Automatic},
-                  {"factorisation", LowPassSolver::Factorisation},
-                  {"conjugate-gradients", LowPassSolver::ConjugateGradients}},
+              std::map<std::string, LowPassSolver>{{"conjugate-gradients", LowPassSolver::ConjugateGradients},
+                                                   {"factorisation", LowPassSolver::Factorisation}},
               CLI::ignore_case))
-          ->default_str("auto");
+          ->default_str("conjugate-gradients");
   fairing_option = cmd.add_option("--fairing", fairing_order, "--base fairing: order 1 membrane, 2 thin plate, 3 minimum variation")
       ->check(CLI::Range(1, 3))
       ->capture_default_str();

@@ -191,9 +191,8 @@ const Choices<msd::DecompositionKind> kBases = {{"low-pass", msd::DecompositionK
                                                 {"remeshed", msd::DecompositionKind::Remeshed},
                                                 {"subdivision", msd::DecompositionKind::Subdivision}};
 const Choices<msd::LowPassSolver> kLowPassSolvers = {
-    {"auto", msd::LowPassSolver::Automatic},
-    {"factorisation", msd::LowPassSolver::Factorisation},
-    {"conjugate-gradients", msd::LowPassSolver::ConjugateGradients}};
+    {"conjugate-gradients", msd::LowPassSolver::ConjugateGradients},
+    {"factorisation", msd::LowPassSolver::Factorisation}};
 const Choices<msd::FairingOrder> kFairings = {{"membrane", msd::FairingOrder::Membrane},
                                               {"thin-plate", msd::FairingOrder::ThinPlate},
                                               {"minimum-variation", msd::FairingOrder::MinimumVariation}};
@@ -409,17 +408,17 @@ const std::vector<Option>& options_table() {
                           [](const MethodSettings& s, const std::string&) {
                             return !msd::reads_detail_scale(s.decomposition.kind);
                           }));
-    t.push_back(none_when(choice_option(
-                              "low_pass_solver", {"multiscale"},
-                              "how the low-pass base's system is solved: 'auto' uses conjugate gradients "
-                              "from 500k unknowns (faster there, half the memory) and a factorisation "
-                              "below; None (its value with a fairing or subdivision base): unset",
-                              kLowPassSolvers, [](auto& s, const std::string&) -> auto& {
-                                return s.decomposition.low_pass.solver;
-                              }),
-                          [](const MethodSettings& s, const std::string&) {
-                            return !msd::reads_detail_scale(s.decomposition.kind);
-                          }));
+    t.push_back(
+        none_when(choice_option(
+                      "low_pass_solver", {"multiscale"},
+                      "how the low-pass base's system is solved: 'conjugate-gradients' (half the memory of a "
+                      "factorisation, right where it fails; the factorisation where they do not apply) or "
+                      "'factorisation'; None (its value with a fairing or subdivision base): unset",
+                      kLowPassSolvers,
+                      [](auto& s, const std::string&) -> auto& { return s.decomposition.low_pass.solver; }),
+                  [](const MethodSettings& s, const std::string&) {
+                    return !msd::reads_detail_scale(s.decomposition.kind);
+                  }));
     {
       Option o{"fairing", {"multiscale"},
                "base='fairing': the order of the fairing, 1 | 2 | 3 or 'membrane' | 'thin-plate' | 'minimum-variation'",

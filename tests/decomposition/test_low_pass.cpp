@@ -272,3 +272,79 @@ TEST_CASE("low-pass base: detail heights at rounding level are no detail layer, 
     CHECK(B == tube.smooth);
   }
 }
+
+TEST_CASE(
+    "low-pass base: a closed piece far smaller than the detail scale stays where it is, whatever the mesh "
+    "size",
+    "[decomposition][low-pass]") {
+  // A break test's survey plane with an 18-vertex sphere of radius 0.01 floating above it: the factorisation
+  // (then the default below 500k unknowns) put the sphere's base 47 radii off its centre, at radius 0.001 it
+  // called the system singular "near vertex 40414 (degenerate faces around it?)"; conjugate gradients (then
+  // the default above) gave the centre. The tiny piece's system is singular to double precision for a
+  // factorisation ((L / r)⁴ ≈ 1e18), while the preconditioned iteration's condition number stays 2.
+  SceneOptions o;
+  o.resolution = 2000;
+  const Scene plane = make_scene("lift", o);
+  for (double r : {1e-3, 1e-4}) {
+    INFO("radius " << r);
+    Positions ball;
+    Faces ball_faces;
+    test::icosphere(1, ball, ball_faces);
+    const Vec3 centre(0.5, 0.5, 0.3);
+    Positions P(plane.P.rows() + ball.rows(), 3);
+    Faces F(plane.F.rows() + ball_faces.rows(), 3);
+    P << plane.P, (ball * r).rowwise() + centre.transpose();
+    F << plane.F, ball_faces.array() + static_cast<int>(plane.P.rows());
+    LowPassOptions options;
+    options.detail_scale = 0.3;
+    LowPassReport report;
+    const Positions B = low_pass_base(P, F, options, &report);
+    CHECK(report.iterations > 0);
+    CHECK(report.solver_fallback.empty());
+    for (Eigen::Index v = plane.P.rows(); v < P.rows(); ++v)
+      CHECK((B.row(v) - centre.transpose()).norm() <= r);
+    // The plane's base is the plane's alone.
+    const Positions B_plane = low_pass_base(plane.P, plane.F, options);
+    CHECK(test::max_row_distance(B.topRows(plane.P.rows()), B_plane) <= 1e-9);
+  }
+}
+
+TEST_CASE(
+    "low-pass base: the rounding of far-off coordinates is no detail layer, and no candidate claims no "
+    "growth",
+    "[decomposition][low-pass]") {
+  // A flat tilted unit plane moved to 1e7: its "details" are the coordinates' rounding (rms 2.4e-10, above
+  // 1e-10 of the diameter), and the search found a layer at L = 0.091.
+  const int n = 40;
+  Positions P(n * n, 3);
+  Faces F(2 * (n - 1) * (n - 1), 3);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double x = double(i) / (n - 1), y = double(j) / (n - 1);
+      P.row(j * n + i) << 1e7 + x, 1e7 + y, 1e7 + 0.3 * x + 0.2 * y;
+    }
+  int f = 0;
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = j * n + i;
+      F.row(f++) << a, a + 1, a + n + 1;
+      F.row(f++) << a, a + n + 1, a + n;
+    }
+  for (LowPassSolver solver : {LowPassSolver::ConjugateGradients, LowPassSolver::Factorisation}) {
+    LowPassOptions options;
+    options.solver = solver;
+    LowPassReport report;
+    low_pass_base(P, F, options, &report);
+    CHECK(report.detail_scale == 0);
+    CHECK_THAT(report.no_layer_reason, Contains("removes nothing measurable"));
+  }
+  // An icosahedron: its smallest candidate (4 mean edge lengths) is beyond 0.6 of its diameter, so nothing
+  // is tried; the reason said "the detail heights grow with every scale tried".
+  Positions ico;
+  Faces ico_faces;
+  test::icosphere(0, ico, ico_faces);
+  LowPassReport report;
+  low_pass_base(ico, ico_faces, {}, &report);
+  CHECK(report.candidates.empty());
+  CHECK_THAT(report.no_layer_reason, Contains("no candidate scale fits the mesh"));
+}

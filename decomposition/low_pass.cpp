@@ -124,13 +124,14 @@ class LowPassSystem {
   bool all_known() const { return unknown_.empty(); }
   //! Conjugate-gradient iterations of the last solve(); 0 where it factored the system.
   int iterations() const { return iterations_; }
+  //! Why conjugate gradients were asked for (LowPassSolver) and the system was factored; empty otherwise.
+  const std::string& fallback_reason() const { return fallback_reason_; }
 
   Positions solve(double detail_scale) {
     const double l = detail_scale / (2 * kPi), l4 = l * l * l * l;
     Eigen::MatrixX3d X;
-    iterations_ = 0;
+    iterations_ = 0;  // solve_iteratively() counts them, give_up() zeroes them again
     if (iterative_ && solve_iteratively(l * l, X)) return positions(X);
-    iterations_ = 0;
     if (bending_uu_.size() == 0) {  // the factored path's matrices, once
       const SparseMatrix bending = weighted_square(W_, inverse_);
       bending_uu_ = submatrix(bending, unknown_, unknown_);
@@ -263,16 +264,12 @@ class LowPassSystem {
   // Conjugate gradients do not apply: A is factored from now on, and the preconditioner's memory released.
   void give_up(const std::string& why) {
     iterative_ = false;
+    iterations_ = 0;
     fallback_reason_ = why;
     preconditioner_ = SparseSPDSolver();
     release_freed_memory();
   }
 
- public:
-  //! Why conjugate gradients were asked for (LowPassSolver) and the system was factored; empty otherwise.
-  const std::string& fallback_reason() const { return fallback_reason_; }
-
- private:
   Eigen::VectorXd mass_;
   SparseMatrix W_, W_uu_, W_uk_;  // the cotan Laplacian, its blocks (unknown, unknown), (unknown, known)
   Eigen::VectorXd inverse_, inverse_u_;  // M̃⁻¹ (0 on the boundary and without area), on the unknowns

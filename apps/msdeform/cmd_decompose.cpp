@@ -2,6 +2,7 @@
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "apps/msdeform/commands.h"
@@ -16,6 +17,14 @@
 namespace msd::cli {
 
 namespace {
+// Which solver gave the low-pass base, and why conjugate gradients gave way where they did.
+std::string solver_line(const LowPassReport& r) {
+  if (r.iterations > 0)
+    return "solved by conjugate gradients, " + std::to_string(r.iterations) + " iterations";
+  if (r.solver_fallback.empty()) return "solved by factorisation";
+  return "solved by factorisation: conjugate gradients gave way, " + r.solver_fallback;
+}
+
 void print_check(const char* indent, const DetailCheck& c) {
   std::printf("%sdetail heights |S - B|: max %.4g, rms %.4g; base's smallest curvature radius %.4g; fold ratio "
               "p99.9 %.3g, max %.3g",
@@ -84,18 +93,10 @@ void add_decompose_command(CLI::App& app) {
         break;
       default:
         if (report.low_pass.detail_scale > 0)
-          std::printf(
-              "  base: low-pass at detail scale %.10g (%s; mean edge length %.4g; %s)\n",
-              report.low_pass.detail_scale, report.low_pass.automatic ? "chosen automatically" : "given",
-              report.low_pass.mean_edge_length,
-              report.low_pass.iterations > 0 ? ("solved by conjugate gradients, " +
-                                                std::to_string(report.low_pass.iterations) + " iterations")
-                                                   .c_str()
-              : report.low_pass.solver_fallback.empty()
-                  ? "solved by factorisation"
-                  : ("solved by factorisation: conjugate gradients gave way, " +
-                     report.low_pass.solver_fallback)
-                        .c_str());
+          std::printf("  base: low-pass at detail scale %.10g (%s; mean edge length %.4g; %s)\n",
+                      report.low_pass.detail_scale,
+                      report.low_pass.automatic ? "chosen automatically" : "given",
+                      report.low_pass.mean_edge_length, solver_line(report.low_pass).c_str());
         else
           std::printf("  base: the mesh itself, no separate detail layer: %s%s\n",
                       report.low_pass.no_layer_reason.c_str(),

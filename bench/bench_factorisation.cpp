@@ -1,4 +1,5 @@
-// Assembly and factorisation of the bi-Laplacian system on the free vertices of the lift scene.
+// Assembly and factorisation of the bi-Laplacian system on the free vertices of the lift scene, then the
+// 3-column substitution of a frame-time solve against its memory floor.
 // Usage: bench_factorisation [resolution ...]   (default: 10k 100k 1M)
 #include <chrono>
 #include <cstdio>
@@ -42,6 +43,31 @@ int main(int argc, char** argv) {
     std::printf("%10ld %10zu %10.3f %10.3f %11.3f %10.3f %10.3f %10.3f %12.3g\n", long(scene.P.rows()), free.size(),
                 t_cotan, t_bilap, t_restrict, t_factor, solver.analyse_seconds(), solver.numeric_seconds(),
                 solver.factor_nonzeros());
+    std::fflush(stdout);
+  }
+  // The frame-time substitution (SparseSPDSolver::solve_ordered, 3 right-hand sides) with the factor of
+  // deformation transfer's system, the cotan Laplacian on the free vertices, reading the factor in double
+  // and from its single-precision copy (the low-pass preconditioner's solves). The floor: one read of the
+  // double factor per pass (forward, back) at the streamed bandwidth.
+  const double bandwidth = triad_gigabytes_per_second();
+  std::printf("\nsubstitution, 3 columns, cotan Laplacian on the free vertices (streamed %.1f GB/s)\n",
+              bandwidth);
+  std::printf("%10s %10s %12s %11s %11s %10s\n", "vertices", "unknowns", "factor nnz", "double[ms]",
+              "single[ms]", "floor[ms]");
+  for (const auto& size : sizes) {
+    msd::SceneOptions options;
+    options.resolution = msd::parse_resolution(size);
+    const msd::Scene scene = msd::make_scene("lift", options);
+    const auto free = scene.region.free_vertices();
+    msd::SparseSPDSolver solver;
+    solver.factor(msd::SparseMatrix(-msd::submatrix(msd::cotan_laplacian(scene.P, scene.F).W, free, free)));
+    std::vector<double> Y(4 * free.size(), 1.0);  // median of 21 solves each
+    const double in_double = time_frames(21, [&](int) { solver.solve_ordered(Y.data(), 3); })[10];
+    solver.set_single_precision_solves(true);
+    const double in_single = time_frames(21, [&](int) { solver.solve_ordered(Y.data(), 3); })[10];
+    std::printf("%10ld %10zu %12.3g %11.2f %11.2f %10.2f\n", long(scene.P.rows()), free.size(),
+                solver.factor_nonzeros(), in_double, in_single,
+                2 * 8 * solver.factor_nonzeros() / (bandwidth * 1e6));
     std::fflush(stdout);
   }
   return 0;

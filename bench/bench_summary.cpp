@@ -38,22 +38,6 @@ double peak_megabytes() {
   return usage.ru_maxrss / 1024.0;  // kilobytes on Linux
 }
 
-// Best of 10 triads over arrays far larger than the caches, counting the three streams (no write-allocate).
-double triad_gigabytes_per_second() {
-  const long n = 64L << 20;
-  std::vector<double> a(n), b(n, 1.0), c(n, 2.0);
-  msd::parallel_for_chunks(n, [&](long i0, long i1) { std::fill(a.begin() + i0, a.begin() + i1, 0.0); });
-  double best = 1e30;
-  for (int rep = 0; rep < 10; ++rep) {
-    const auto t0 = Clock::now();
-    msd::parallel_for_chunks(n, [&](long i0, long i1) {
-      for (long i = i0; i < i1; ++i) a[i] = b[i] + 3.0 * c[i];
-    }, 1 << 20);
-    best = std::min(best, seconds_since(t0));
-  }
-  return 3.0 * sizeof(double) * n / best / 1e9;
-}
-
 void print(const char* name, const std::string& size, long vertices, double prepare, const std::vector<double>& frames,
            const std::string& extra) {
   const double peak = peak_megabytes();

@@ -25,6 +25,17 @@ void release_freed_memory() {
 #endif
 }
 
+bool release_freed_memory_if_large() {
+#ifdef __GLIBC__
+  const std::uint64_t physical = physical_memory();
+  if (physical == 0 || mallinfo2().fordblks <= physical / 8) return false;
+  malloc_trim(0);
+  return true;
+#else
+  return false;
+#endif
+}
+
 std::string out_of_memory_message(const std::string& what) {
   rlimit limit;
   if (what.find("out of memory") == std::string::npos || what.find("ulimit") != std::string::npos ||

@@ -29,6 +29,13 @@ void retain_freed_memory();
 //! multi-scale prepare peaked at 19.9 GB). Costs a walk of the heap and the page faults of reusing them.
 void release_freed_memory();
 
+//! The same, only where the freed heap memory exceeds an eighth of the physical memory (the pages'
+//! faults cost a 1M shell factorisation about 10 %, so not where memory is plentiful); true if it trimmed.
+//! SparseSPDSolver::factor calls it before its peak: the 9.44M lift's multi-scale prepare, whose shell
+//! factors B's bi-Laplacian (1.3e9 factor entries) after the low-pass base, held 6.8 GB of the assembly's
+//! freed temporaries there and went beyond 24.4 GB; with them returned it peaks at 22.0 GB.
+bool release_freed_memory_if_large();
+
 //! An error message `what`; where it says "out of memory" under an address-space limit it does not name,
 //! followed by " under the address-space limit (ulimit -v) of N MB: raise the limit" (the likelier cause
 //! than the machine's memory).

@@ -11,6 +11,7 @@
 #include "msdeform/core/blas_kernels.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/laplacian.h"
+#include "msdeform/core/memory.h"
 
 #ifdef MSD_HAVE_CHOLMOD
 #include <cholmod.h>
@@ -133,6 +134,9 @@ struct SparseSPDSolver::Impl {
     n = static_cast<int>(A.rows());
     cholmod_sparse* S = to_cholmod(A);
     if (owned) SparseMatrix().swap(*owned);
+    // Before the peak of memory (the analysis and the factor), where the factor's blocks cannot reuse the
+    // assembly's freed temporaries in place: their pages back to the system when they are many.
+    release_freed_memory_if_large();
     auto t0 = std::chrono::steady_clock::now();
     L = cholmod_l_analyze(S, &common);
     analyse_seconds = seconds_since(t0);

@@ -1,6 +1,7 @@
 // Assembly and factorisation of the bi-Laplacian system on the free vertices of the lift scene, then the
 // 3-column substitution of a frame-time solve against its memory floor.
 // Usage: bench_factorisation [resolution ...]   (default: 10k 100k 1M)
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -18,6 +19,13 @@ using namespace msd::bench;
 int main(int argc, char** argv) {
   msd::retain_freed_memory();
   const std::vector<std::string> sizes = msd::bench::sizes(argc, argv, {"10k", "100k", "1M"});
+  for (const auto& size : sizes) {  // every size refused before any work (exit 2, bench_common.h)
+    if (size == "-h" || size == "--help") {
+      std::printf("usage: bench_factorisation [resolution ...]   (e.g. 10k 100k 1M; default: 10k 100k 1M)\n");
+      return 0;
+    }
+    msd::parse_resolution(size);
+  }
   std::printf("backend: %s\n", msd::SparseSPDSolver::backend().c_str());
   std::printf("%10s %10s %10s %10s %11s %10s %10s %10s %12s\n", "vertices", "free", "cotan[s]", "bilap[s]",
               "restrict[s]", "factor[s]", "order[s]", "numeric[s]", "factor nnz");
@@ -48,7 +56,8 @@ int main(int argc, char** argv) {
   // The frame-time substitution (SparseSPDSolver::solve_ordered, 3 right-hand sides) with the factor of
   // deformation transfer's system, the cotan Laplacian on the free vertices, reading the factor in double
   // and from its single-precision copy (the low-pass preconditioner's solves). The floor: one read of the
-  // double factor per pass (forward, back) at the streamed bandwidth.
+  // double factor per pass (forward, back) at the streamed bandwidth, for a factor larger than the caches
+  // (a small one is read from them, faster).
   const double bandwidth = triad_gigabytes_per_second();
   std::printf("\nsubstitution, 3 columns, cotan Laplacian on the free vertices (streamed %.1f GB/s)\n",
               bandwidth);
@@ -61,10 +70,23 @@ int main(int argc, char** argv) {
     const auto free = scene.region.free_vertices();
     msd::SparseSPDSolver solver;
     solver.factor(msd::SparseMatrix(-msd::submatrix(msd::cotan_laplacian(scene.P, scene.F).W, free, free)));
-    std::vector<double> Y(4 * free.size(), 1.0);  // median of 21 solves each
-    const double in_double = time_frames(21, [&](int) { solver.solve_ordered(Y.data(), 3); })[10];
+    // Median of 21 solves, each from the same right-hand side (refilled untimed: repeated solves in place
+    // would grow the values towards overflow).
+    std::vector<double> Y(4 * free.size());
+    const auto median_ms = [&] {
+      std::vector<double> ms;
+      for (int i = 0; i < 21; ++i) {
+        std::fill(Y.begin(), Y.end(), 1.0);
+        const auto t0 = Clock::now();
+        solver.solve_ordered(Y.data(), 3);
+        ms.push_back(ms_since(t0));
+      }
+      std::sort(ms.begin(), ms.end());
+      return ms[ms.size() / 2];
+    };
+    const double in_double = median_ms();
     solver.set_single_precision_solves(true);
-    const double in_single = time_frames(21, [&](int) { solver.solve_ordered(Y.data(), 3); })[10];
+    const double in_single = median_ms();
     std::printf("%10ld %10zu %12.3g %11.2f %11.2f %10.2f\n", long(scene.P.rows()), free.size(),
                 solver.factor_nonzeros(), in_double, in_single,
                 2 * 8 * solver.factor_nonzeros() / (bandwidth * 1e6));

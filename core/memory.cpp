@@ -1,5 +1,8 @@
 #include "msdeform/core/memory.h"
 
+#include <cstdlib>
+#include <fstream>
+
 #include <malloc.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -25,10 +28,39 @@ void release_freed_memory() {
 #endif
 }
 
+std::uint64_t cgroup_memory_limit() {
+  std::ifstream groups("/proc/self/cgroup");
+  std::string line;
+  std::uint64_t limit = 0;
+  while (std::getline(groups, line)) {  // "0::/path" (v2) or "N:memory:/path" (v1)
+    const auto a = line.find(':'), b = a == std::string::npos ? a : line.find(':', a + 1);
+    if (b == std::string::npos) continue;
+    const std::string id = line.substr(0, a), controllers = line.substr(a + 1, b - a - 1),
+                      path = line.substr(b + 1);
+    std::string file;
+    if (id == "0" && controllers.empty())
+      file = "/sys/fs/cgroup" + path + "/memory.max";
+    else if (controllers == "memory")
+      file = "/sys/fs/cgroup/memory" + path + "/memory.limit_in_bytes";
+    else
+      continue;
+    std::ifstream in(file);
+    std::string text;
+    if (!(in >> text)) continue;
+    char* end = nullptr;
+    const unsigned long long value = std::strtoull(text.c_str(), &end, 10);
+    if (end == text.c_str() || *end != '\0' || value == 0) continue;  // "max": no limit
+    if (limit == 0 || value < limit) limit = value;
+  }
+  return limit;
+}
+
 bool release_freed_memory_if_large() {
 #ifdef __GLIBC__
-  const std::uint64_t physical = physical_memory();
-  if (physical == 0 || mallinfo2().fordblks <= physical / 8) return false;
+  std::uint64_t usable = physical_memory();
+  if (const std::uint64_t group = cgroup_memory_limit(); group > 0 && (usable == 0 || group < usable))
+    usable = group;
+  if (usable == 0 || mallinfo2().fordblks <= usable / 8) return false;
   malloc_trim(0);
   return true;
 #else

@@ -29,11 +29,16 @@ void retain_freed_memory();
 //! multi-scale prepare peaked at 19.9 GB). Costs a walk of the heap and the page faults of reusing them.
 void release_freed_memory();
 
-//! The same, only where the freed heap memory exceeds an eighth of the physical memory (the pages'
-//! faults cost a 1M shell factorisation about 10 %, so not where memory is plentiful); true if it trimmed.
+//! The smallest memory limit of the cgroups this process is in (v2 memory.max, v1
+//! memory.limit_in_bytes; a container's limit), in bytes; 0 where there is none or it cannot be read.
+std::uint64_t cgroup_memory_limit();
+
+//! The same as release_freed_memory(), only where the freed heap memory exceeds an eighth of the memory
+//! the process may use (the physical memory, or a smaller cgroup limit): the pages' new faults cost a 1M
+//! shell factorisation about 10 %, so not where memory is plentiful. True if it trimmed.
 //! SparseSPDSolver::factor calls it before its peak: the 9.44M lift's multi-scale prepare, whose shell
 //! factors B's bi-Laplacian (1.3e9 factor entries) after the low-pass base, held 6.8 GB of the assembly's
-//! freed temporaries there and went beyond 24.4 GB; with them returned it peaks at 22.0 GB.
+//! freed temporaries there and went beyond 24.4 GB; with them returned it peaks at 22.1 GB.
 bool release_freed_memory_if_large();
 
 //! An error message `what`; where it says "out of memory" under an address-space limit it does not name,

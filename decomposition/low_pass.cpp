@@ -29,10 +29,10 @@ constexpr double kDefectFraction = 1e-3;
 // Automatic scale: a base with less than this fraction of S's area has lost the shape (a tube smoothed
 // towards its axis), whatever its details look like.
 constexpr double kMinAreaRatio = 0.5;
-// Automatic scale: an rms detail height below this fraction of the diameter, or below this many units in the
-// last place of S's largest coordinate, is rounding (of the solve, at 1e-13 of the coordinates, and of S
-// itself: a plane 1 across moved to 1e7 shows rms heights of 2.4e-10), not a layer: a plateau must start
-// above it.
+// An rms detail height below this fraction of the diameter, or below this many units in the last place of
+// S's largest coordinate, is rounding (of the solve, at 1e-13 of the coordinates, and of S itself: a plane 1
+// across moved to 1e7 shows rms heights of 2.4e-10), not a layer: a plateau of the automatic scale must
+// start above it, and a given scale that removes no more is no layer either.
 constexpr double kNoiseHeight = 1e-10;
 constexpr double kNoiseUlps = 16;
 // A given detail scale above this many diameters of S is refused (see low_pass_base).
@@ -65,6 +65,12 @@ void symmetric_product(const SparseMatrix& A, const Eigen::MatrixX3d& X, Eigen::
 double diameter(const Positions& S) {
   const Eigen::RowVector3d c = S.colwise().mean();
   return 2 * std::sqrt((S.rowwise() - c).rowwise().squaredNorm().maxCoeff());
+}
+
+// The rms detail height at rounding level for S (kNoiseHeight, kNoiseUlps).
+double noise_height(const Positions& S) {
+  return std::max(kNoiseHeight * diameter(S),
+                  kNoiseUlps * std::numeric_limits<double>::epsilon() * S.cwiseAbs().maxCoeff());
 }
 
 // (M + ℓ⁴ W M̃⁻¹ W) B = M S on the vertices off the mesh boundary, B = S on it; prepared once per mesh,
@@ -328,12 +334,19 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
     B = system.solve(r.detail_scale);
     r.iterations = system.iterations();
     r.check = check_details(S, B, F);
+    if (r.check.rms_height <= noise_height(S)) {  // far below the edge length: the solve's rounding alone
+      r.no_layer_reason = "the detail scale " + format_number(r.detail_scale) +
+                          " removes nothing measurable (rms detail height " +
+                          format_number(r.check.rms_height) + ", rounding; the mean edge length is " +
+                          format_number(r.mean_edge_length) + ")";
+      B = S;
+      r.check = check_details(S, B, F);
+    }
   } else {
     r.automatic = true;
     const double size = diameter(S), smallest = 4 * r.mean_edge_length,
                  largest = options.max_scale_fraction * size;
-    const double noise = std::max(
-        kNoiseHeight * size, kNoiseUlps * std::numeric_limits<double>::epsilon() * S.cwiseAbs().maxCoeff());
+    const double noise = noise_height(S);
     const double area = face_areas(S, F).sum();
     const long allowed_folds = static_cast<long>(kDefectFraction * static_cast<double>(S.rows()));
     double previous_rms = 0;

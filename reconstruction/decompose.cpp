@@ -197,7 +197,9 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
     report.warning =
         "decompose: no separate detail layer (" + report.low_pass.no_layer_reason +
         "), so the base is the mesh itself and there are no details: an edit is the base method's alone" +
-        (report.low_pass.all_boundary ? "" : "; --detail-scale sets a layer");
+        (report.low_pass.all_boundary ? ""
+         : report.low_pass.automatic  ? "; --detail-scale sets a layer"
+                                      : "; a larger --detail-scale (or 0, the automatic scale) sets one");
   else if (report.warning.empty())
     report.warning = collapsed_piece_warning(S, d.base, F);
   if (o.kind == DecompositionKind::Remeshed)

@@ -50,6 +50,10 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
   } catch (const InvalidInput& e) {  // a refusal of the mesh's structure (a fan too large to factor): S's too
     throw InvalidInput(name_ + ": the base deformer " + base_deformer_->name() + " on the base B: " + e.what());
   } catch (const Error& e) {  // a numerical or topological failure: of B, or of S that B inherited
+    if (std::string(e.what()).find("out of memory") != std::string::npos)  // not the mesh's fault
+      throw SolverError(name_ + ": the base deformer " + base_deformer_->name() +
+                        " ran out of memory on the base B (" + std::to_string(d.edit.rows()) +
+                        " vertices): " + e.what());
     const char* cause =
         d.base_is_input
             ? "the input mesh (the base is the mesh itself here); it is degenerate there, repair it: "

@@ -2,6 +2,7 @@
 
 #include "msdeform/core/errors.h"
 #include "msdeform/core/extent.h"
+#include "msdeform/core/laplacian.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/mesh_io.h"
 #include "msdeform/core/scenes.h"
@@ -105,6 +106,25 @@ TEST_CASE("low-pass base: a given scale is used as is, bad options are refused",
   options.detail_scale = 0;
   options.max_fold_ratio = 0;
   CHECK_THROWS_WITH(low_pass_base(s.P, s.F, options), Contains("max_fold_ratio"));
+}
+
+TEST_CASE("low-pass base: a given scale far below the edge length is no detail layer, and says so",
+          "[decomposition][low-pass]") {
+  // The bumpy plane at 1e-3 of its mean edge length: the base moves by rounding only (a break test: the
+  // details came out at 1e-11 of the mesh, the edit was the base deformer's alone, and nothing said so).
+  SceneOptions o;
+  o.resolution = 10000;
+  const Scene s = make_scene("lift", o);
+  LowPassOptions options;
+  options.detail_scale = 1e-3 * mean_edge_length(s.P, s.F);
+  LowPassReport report;
+  const Positions B = low_pass_base(s.P, s.F, options, &report);
+  CHECK_FALSE(report.automatic);
+  CHECK_THAT(report.no_layer_reason, Contains("removes nothing measurable") && Contains("mean edge length"));
+  CHECK(B == s.P);
+  options.detail_scale = 0.3;  // a scale that removes the bumps is a layer
+  low_pass_base(s.P, s.F, options, &report);
+  CHECK(report.no_layer_reason.empty());
 }
 
 TEST_CASE("low-pass base: a mesh whose vertices all lie on its boundary is its own base", "[decomposition][low-pass]") {

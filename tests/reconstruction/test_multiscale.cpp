@@ -552,3 +552,30 @@ TEST_CASE("multiscale: a base deformer failing on a degenerate input names the i
   CHECK_THROWS_WITH(ms.prepare(s.P, s.F, s.region),
                     Contains("failed on the") && Contains("repair") && !Contains("not the input mesh"));
 }
+
+namespace {
+// A base deformer that fails as a factorisation beyond the memory does (SparseSPDSolver's message).
+class OutOfMemoryDeformer : public msd::Deformer {
+ public:
+  const std::string& name() const override { return name_; }
+  msd::DeformerTraits traits() const override { return {}; }
+
+ protected:
+  void do_prepare(const Positions&, const Faces&, const Region&) override {
+    throw SolverError("SparseSPDSolver: out of memory during factorisation");
+  }
+  void do_deform(const std::vector<msd::Mat4>&, Positions&) override {}
+
+ private:
+  std::string name_ = "out-of-memory";
+};
+}  // namespace
+
+TEST_CASE("multiscale: a base deformer out of memory says so, not that the mesh is degenerate",
+          "[reconstruction][multiscale][bad-input]") {
+  const Scene s = scene("lift");
+  MultiscaleDeformer ms({}, std::make_unique<OutOfMemoryDeformer>());
+  CHECK_THROWS_WITH(ms.prepare(s.P, s.F, s.region), Contains("ran out of memory on the base B") &&
+                                                        Contains("out of memory during factorisation") &&
+                                                        !Contains("repair") && !Contains("degenerate"));
+}

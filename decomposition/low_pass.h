@@ -77,9 +77,11 @@ struct LowPassReport {
   //! Every vertex a face uses lies on the mesh boundary (a strip, one triangle), which the low-pass keeps in
   //! place: B = S, no details.
   bool all_boundary = false;
-  //! Why B = S (detail_scale 0), in words: every vertex on the boundary; the automatic search stopped at
+  //! Why B = S, in words: every vertex on the boundary; the automatic search (detail_scale 0) stopped at
   //! a candidate that removes shape (its details close to folding, folding, or its area lost) before the
-  //! detail heights stopped growing; or they grew at every scale tried. Empty when there is a detail layer.
+  //! detail heights stopped growing, or they grew at every scale tried, or stayed at rounding level; or a
+  //! given detail scale (detail_scale > 0) removes nothing beyond rounding (far below the edge length).
+  //! Empty when there is a detail layer.
   std::string no_layer_reason;
   double seconds = 0;  //!< of the computation (also when the base came from a LowPassCache)
   //! Conjugate-gradient iterations of the last system solved (the returned base's, or the last candidate's

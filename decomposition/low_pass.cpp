@@ -67,9 +67,9 @@ double diameter(const Positions& S) {
   return 2 * std::sqrt((S.rowwise() - c).rowwise().squaredNorm().maxCoeff());
 }
 
-// The rms detail height at rounding level for S (kNoiseHeight, kNoiseUlps).
-double noise_height(const Positions& S) {
-  return std::max(kNoiseHeight * diameter(S),
+// The rms detail height at rounding level for S of diameter `size` (kNoiseHeight, kNoiseUlps).
+double noise_height(const Positions& S, double size) {
+  return std::max(kNoiseHeight * size,
                   kNoiseUlps * std::numeric_limits<double>::epsilon() * S.cwiseAbs().maxCoeff());
 }
 
@@ -334,7 +334,8 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
     B = system.solve(r.detail_scale);
     r.iterations = system.iterations();
     r.check = check_details(S, B, F);
-    if (r.check.rms_height <= noise_height(S)) {  // far below the edge length: the solve's rounding alone
+    if (r.check.rms_height <=
+        noise_height(S, diameter(S))) {  // far below the edge length: the solve's rounding alone
       r.no_layer_reason = "the detail scale " + format_number(r.detail_scale) +
                           " removes nothing measurable (rms detail height " +
                           format_number(r.check.rms_height) + ", rounding; the mean edge length is " +
@@ -346,7 +347,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
     r.automatic = true;
     const double size = diameter(S), smallest = 4 * r.mean_edge_length,
                  largest = options.max_scale_fraction * size;
-    const double noise = noise_height(S);
+    const double noise = noise_height(S, size);
     const double area = face_areas(S, F).sum();
     const long allowed_folds = static_cast<long>(kDefectFraction * static_cast<double>(S.rows()));
     double previous_rms = 0;

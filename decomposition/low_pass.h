@@ -69,7 +69,9 @@ struct LowPassCandidate {
 };
 
 struct LowPassReport {
-  double detail_scale = 0;  //!< L used (mesh units); 0 when no detail layer was found (B = S)
+  //! L used (mesh units), given or chosen; 0 when the automatic choice found no detail layer. A given L
+  //! may find none either (has_detail_layer()).
+  double detail_scale = 0;
   bool automatic = false;   //!< chosen by the fold check (LowPassOptions::detail_scale was 0)
   double mean_edge_length = 0;
   std::vector<LowPassCandidate> candidates;  //!< what the automatic choice evaluated, in that order
@@ -83,6 +85,15 @@ struct LowPassReport {
   //! given detail scale (detail_scale > 0) removes nothing beyond rounding (far below the edge length).
   //! Empty when there is a detail layer.
   std::string no_layer_reason;
+  //! Whether B differs from S by a detail layer (no_layer_reason empty); false: B = S.
+  bool has_detail_layer() const { return no_layer_reason.empty(); }
+  //! For a message without a layer: "" (every vertex on the boundary), "--detail-scale sets one" (the
+  //! automatic choice found none) or "a larger --detail-scale (or 0, the automatic scale) sets one".
+  const char* no_layer_remedy() const {
+    return all_boundary ? ""
+           : automatic  ? "--detail-scale sets one"
+                        : "a larger --detail-scale (or 0, the automatic scale) sets one";
+  }
   double seconds = 0;  //!< of the computation (also when the base came from a LowPassCache)
   //! Conjugate-gradient iterations of the last system solved (the returned base's, or the last candidate's
   //! of the automatic choice); 0 where it was factored (LowPassSolver).

@@ -92,15 +92,15 @@ void add_decompose_command(CLI::App& app) {
         std::printf("  base: Loop subdivision of the control mesh (%d vertices)\n", report.control_vertices);
         break;
       default:
-        if (report.low_pass.detail_scale > 0)
+        if (report.low_pass.has_detail_layer())
           std::printf("  base: low-pass at detail scale %.10g (%s; mean edge length %.4g; %s)\n",
                       report.low_pass.detail_scale,
                       report.low_pass.automatic ? "chosen automatically" : "given",
                       report.low_pass.mean_edge_length, solver_line(report.low_pass).c_str());
         else
-          std::printf("  base: the mesh itself, no separate detail layer: %s%s\n",
-                      report.low_pass.no_layer_reason.c_str(),
-                      report.low_pass.all_boundary ? "" : " (--detail-scale sets one)");
+          std::printf("  base: the mesh itself, no separate detail layer: %s%s%s%s\n",
+                      report.low_pass.no_layer_reason.c_str(), report.low_pass.all_boundary ? "" : " (",
+                      report.low_pass.no_layer_remedy(), report.low_pass.all_boundary ? "" : ")");
         for (const auto& k : report.low_pass.candidates) {
           std::printf("    tried %-10.4g", k.detail_scale);
           print_check("", k.check);

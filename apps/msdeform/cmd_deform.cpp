@@ -176,21 +176,21 @@ void add_deform_command(CLI::App& app) {
       const DecompositionReport& d = ms->decomposition_report();
       std::printf("  base deformer: %s\n", ms->base_deformer().name().c_str());
       const bool low_pass = d.kind == DecompositionKind::LowPass || d.kind == DecompositionKind::Remeshed;
-      if (low_pass && d.low_pass.detail_scale > 0)
+      if (low_pass && d.low_pass.has_detail_layer())
         std::printf("  base: low-pass at detail scale %.4g (%s)\n", d.low_pass.detail_scale,
                     d.low_pass.automatic ? "chosen automatically; --detail-scale sets it" : "given");
       else if (low_pass)
-        std::printf("  base: %s, no separate detail layer (%s%s)\n",
+        std::printf("  base: %s, no separate detail layer (%s%s%s)\n",
                     d.kind == DecompositionKind::Remeshed ? "the mesh remeshed" : "the mesh itself",
-                    d.low_pass.no_layer_reason.c_str(),
-                    d.low_pass.all_boundary ? "" : "; --detail-scale sets one");
+                    d.low_pass.no_layer_reason.c_str(), d.low_pass.all_boundary ? "" : "; ",
+                    d.low_pass.no_layer_remedy());
       else if (d.kind == DecompositionKind::Fairing)
         std::printf("  base: faired free region\n");
       else
         std::printf("  base: Loop subdivision of a control mesh of %d vertices\n", d.control_vertices);
       if (d.kind == DecompositionKind::Remeshed)
         std::printf("  base remeshed to edge length %.4g: %d vertices\n", d.remesh_edge_length, d.remeshed_vertices);
-      if (!low_pass || d.low_pass.detail_scale > 0)  // without a layer there are no details to measure
+      if (!low_pass || d.low_pass.has_detail_layer())  // without a layer there are no details to measure
         std::printf("  details: max height %.4g, base's smallest curvature radius %.4g, fold ratio %.3g\n",
                     d.check.max_height, d.check.min_curvature_radius, d.check.max_fold_ratio);
     }

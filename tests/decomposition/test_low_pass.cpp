@@ -122,9 +122,12 @@ TEST_CASE("low-pass base: a given scale far below the edge length is no detail l
   CHECK_FALSE(report.automatic);
   CHECK_THAT(report.no_layer_reason, Contains("removes nothing measurable") && Contains("mean edge length"));
   CHECK(B == s.P);
+  CHECK_FALSE(report.has_detail_layer());
+  CHECK_THAT(report.no_layer_remedy(), Contains("a larger --detail-scale"));
   options.detail_scale = 0.3;  // a scale that removes the bumps is a layer
   low_pass_base(s.P, s.F, options, &report);
   CHECK(report.no_layer_reason.empty());
+  CHECK(report.has_detail_layer());
 }
 
 TEST_CASE("low-pass base: a mesh whose vertices all lie on its boundary is its own base", "[decomposition][low-pass]") {

@@ -296,21 +296,25 @@ class LowPassSystem {
 
 }  // namespace
 
+void LowPassOptions::validate(const std::string& who) const {
+  if (!(detail_scale >= 0) || !std::isfinite(detail_scale))
+    throw InvalidInput(who + ": the detail scale must be finite and >= 0 (0 = automatic), got " +
+                       format_number(detail_scale));
+  if (!(max_fold_ratio > 0 && max_fold_ratio <= 1))
+    throw InvalidInput(who + ": max_fold_ratio must be in (0, 1]");
+  if (!(plateau_growth > 1) || !std::isfinite(plateau_growth))
+    throw InvalidInput(who + ": plateau_growth must be finite and > 1");
+  if (!(max_scale_fraction > 0) || !std::isfinite(max_scale_fraction))
+    throw InvalidInput(who + ": max_scale_fraction must be positive and finite");
+}
+
 Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions& options, LowPassReport* report,
                         const std::function<void(const std::string&)>& progress) {
   const auto t0 = std::chrono::steady_clock::now();
   check_mesh_arrays(S, F, kWho);
   if (F.rows() == 0) throw InvalidInput(std::string(kWho) + ": the mesh has no faces");
   check_extent(S, kWho);
-  if (!(options.detail_scale >= 0) || !std::isfinite(options.detail_scale))
-    throw InvalidInput(std::string(kWho) + ": the detail scale must be finite and >= 0 (0 = automatic), got " +
-                       std::to_string(options.detail_scale));
-  if (!(options.max_fold_ratio > 0 && options.max_fold_ratio <= 1))
-    throw InvalidInput(std::string(kWho) + ": max_fold_ratio must be in (0, 1]");
-  if (!(options.plateau_growth > 1) || !std::isfinite(options.plateau_growth))
-    throw InvalidInput(std::string(kWho) + ": plateau_growth must be finite and > 1");
-  if (!(options.max_scale_fraction > 0) || !std::isfinite(options.max_scale_fraction))
-    throw InvalidInput(std::string(kWho) + ": max_scale_fraction must be positive and finite");
+  options.validate(kWho);
 
   // Far beyond the diameter the filter keeps only S's affine part, and (L/2π)⁴ overflows the system's
   // entries long before L reaches the largest double.

@@ -59,6 +59,9 @@ struct LowPassOptions {
   //! box, it does not change when S turns). > 0.
   double max_scale_fraction = 0.6;
   LowPassSolver solver = LowPassSolver::ConjugateGradients;
+  //! \throw InvalidInput naming `who` and the first option out of its range (above); low_pass_base() and
+  //! the multi-scale deformers' constructors call it, so a bad value fails before any work.
+  void validate(const std::string& who) const;
 };
 
 //! One scale the automatic choice evaluated.

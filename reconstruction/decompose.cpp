@@ -140,6 +140,13 @@ DecompositionKind decomposition_kind(const std::string& name) {
   throw InvalidInput("unknown decomposition '" + name + "' (known: low-pass, fairing, remeshed, subdivision)");
 }
 
+void DecompositionOptions::validate(const std::string& who) const {
+  low_pass.validate(who);
+  if (!(remesh_edge_length >= 0) || !std::isfinite(remesh_edge_length))
+    throw InvalidInput(who +
+                       ": the remeshing edge length must be finite and >= 0 (0 = the mean edge length)");
+}
+
 Decomposition decompose(const Positions& S, const Faces& F, const Region& region, const DecompositionOptions& o,
                         const std::function<void(const std::string&)>& progress) {
   check_mesh_arrays(S, F, "decompose");
@@ -147,10 +154,7 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
   if (region.num_vertices() != S.rows())
     throw InvalidInput("decompose: the region has " + std::to_string(region.num_vertices()) +
                        " vertex labels but the mesh has " + std::to_string(S.rows()) + " vertices");
-  if (!(o.low_pass.detail_scale >= 0) || !std::isfinite(o.low_pass.detail_scale))
-    throw InvalidInput("decompose: the detail scale must be finite and >= 0 (0 = automatic)");
-  if (!(o.remesh_edge_length >= 0) || !std::isfinite(o.remesh_edge_length))
-    throw InvalidInput("decompose: the remeshing edge length must be finite and >= 0 (0 = the mean edge length)");
+  o.validate("decompose");
   Decomposition d;
   DecompositionReport& report = d.report;
   report.kind = o.kind;

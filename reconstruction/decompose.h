@@ -49,6 +49,9 @@ struct DecompositionOptions {
   //! same low_pass options, e.g. with another region (null: computed each time). Options copied from
   //! these share it.
   std::shared_ptr<LowPassCache> low_pass_cache;
+  //! \throw InvalidInput naming `who` and the first option out of range (the low-pass options, the
+  //! remeshing edge length); decompose() and MultiscaleDeformer's constructor call it.
+  void validate(const std::string& who) const;
 };
 
 //! What decompose() found.

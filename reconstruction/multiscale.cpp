@@ -16,6 +16,7 @@ MultiscaleDeformer::MultiscaleDeformer(MultiscaleOptions options, std::unique_pt
       name_(name.empty() ? std::string("multiscale-") + to_string(options_.encoding.kind) : std::move(name)),
       base_deformer_(base_deformer ? std::move(base_deformer) : std::make_unique<ShellDeformer>()),
       encoding_(make_encoding(options_.encoding)) {
+  options_.decomposition.validate(name_);  // a bad value fails here, not after the caller loaded a mesh
   if (dynamic_cast<const MultiscaleDeformer*>(base_deformer_.get()))
     throw InvalidInput(name_ + ": the base deformer is itself multi-scale; give it a single-scale method (shell, "
                                "propagate, ...)");

@@ -397,7 +397,7 @@ void add_compare_command(CLI::App& app) {
                                            "at 10k vertices; name it to run it): " + [] {
     std::string s;
     for (const auto& n : builtin_methods().names()) s += (s.empty() ? "" : ",") + n;
-    return s;
+    return s + "; multiscale names every multiscale-* encoding";
   }())->delimiter(',');
   cmd->add_option("--scenes", a->scenes, "Built-in scenes (default: lift,bend120,twist135,bar-lift,bar-bend120,bar-twist135,crease120; "
                                          "none when --mesh is given)")
@@ -423,9 +423,16 @@ void add_compare_command(CLI::App& app) {
   cmd->callback([a, cmd] {
     const auto start = std::chrono::steady_clock::now();
     ComparisonOptions options;
-    if (!a->methods.empty())
-      options.methods = a->methods;
-    else
+    if (!a->methods.empty()) {  // "multiscale" (as deform's --method takes it) stands for every encoding
+      std::vector<std::string> encodings;
+      for (const std::string& name : builtin_methods().names())
+        if (is_multiscale(name)) encodings.push_back(name);
+      options.methods.clear();
+      for (const std::string& m : a->methods)
+        for (const std::string& name : m == "multiscale" ? encodings : std::vector<std::string>{m})
+          if (std::find(options.methods.begin(), options.methods.end(), name) == options.methods.end())
+            options.methods.push_back(name);
+    } else
       options.methods.erase(std::remove(options.methods.begin(), options.methods.end(), "primo"), options.methods.end());
     options.self_intersections = !a->no_self_intersections;
     // One line per finished run: its place in all runs and, from the mean time per run so far, the time left.

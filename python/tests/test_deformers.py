@@ -217,6 +217,9 @@ def test_unknown_method_and_options_are_refused_by_name():
         msdeform.Deformer("rbf", max_centres=10**6)
     with pytest.raises(msdeform.InvalidInput, match=r"harmonic_resolution must be in 4\.\.128"):
         msdeform.Deformer("cage-harmonic", harmonic_resolution=256)
+    # A detail scale out of range was accepted here and refused only by prepare(), after the mesh was read.
+    with pytest.raises(msdeform.InvalidInput, match=r"the detail scale must be finite and >= 0 \(0 = automatic\), got -1"):
+        msdeform.Deformer("multiscale-normal", detail_scale=-1)
     with pytest.raises(ValueError, match=r"option iterations = 9223372036854775808 is out of range"):
         msdeform.Deformer("arap", iterations=2**63)
     with pytest.raises(ValueError, match="control applies to base='subdivision'"):

@@ -170,6 +170,12 @@ grep -q "detail scale candidate 1 of at most" err.txt || { cat err.txt; fail "de
 grep -q "note: two edits are named lift; the --mesh is called lift-2 here" err.txt || { cat err.txt; fail "no rename note"; }
 [ -f cmp-clash/meshes/lift--shell.ply ] && [ -f cmp-clash/meshes/lift-2--shell.ply ] ||
   { ls cmp-clash/meshes; fail "the clashing edits do not have their own mesh files"; }
+# compare --methods multiscale, as deform's --method takes it, runs every encoding (it was an unknown method).
+"$msdeform" compare -q --resolution 300 --mesh lift.off --sel lift.sel --def lift.def --methods multiscale,shell \
+  -o cmp-multiscale >out.txt 2>err.txt || { cat err.txt; fail "compare --methods multiscale"; }
+for m in multiscale-vectors multiscale-normal multiscale-volumes multiscale-transfer shell; do
+  [ -f "cmp-multiscale/methods/$m.html" ] || { ls cmp-multiscale/methods; fail "compare --methods multiscale ran no $m"; }
+done
 # compare -o naming a file fails before any scene is built.
 touch not-a-folder
 expect_error 1 "is a file; compare writes a folder" "$msdeform" compare --scenes lift -o not-a-folder

@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <limits>
 #include <tuple>
 
 #include "msdeform/core/errors.h"
@@ -160,6 +161,17 @@ TEST_CASE("multiscale: handles are met and bad options are reported", "[reconstr
   for (int v : s.region.handle_vertices(0)) err = std::max(err, (Vec3(out.row(v)) - transform_point(s.transforms[0], s.P.row(v))).norm());
   CHECK(err <= 1e-9);
   CHECK_THROWS_WITH(encoding_kind("volume"), Contains("unknown detail encoding 'volume'") && Contains("normal"));
+  // Decomposition options out of range are refused when the deformer is built (prepare() refused them).
+  for (const double bad :
+       {-1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    MultiscaleOptions o;
+    o.decomposition.low_pass.detail_scale = bad;
+    CHECK_THROWS_AS(MultiscaleDeformer(o), InvalidInput);
+  }
+  MultiscaleOptions o;
+  o.decomposition.remesh_edge_length = -2;
+  CHECK_THROWS_WITH(MultiscaleDeformer(o),
+                    Contains("multiscale-normal: the remeshing edge length must be finite"));
 }
 
 TEST_CASE("multiscale: a remeshed base (CGAL isotropic remeshing) for normal, volumes and transfer",

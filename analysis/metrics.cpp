@@ -10,6 +10,7 @@
 #include "msdeform/core/errors.h"
 #include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
+#include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/core/rotation.h"
 #include "msdeform/decomposition/detail_check.h"
@@ -161,11 +162,7 @@ namespace {
 // P moved so its bounding box is centred at the origin: heights do not depend on where a surface sits, but
 // a fairing solved in absolute coordinates far out did (the lift's detail change read 3 % at the origin,
 // 12 % at 1e10 and 22 % at 1e11).
-Positions centred(const Positions& P) {
-  if (P.rows() == 0) return P;
-  const Eigen::RowVector3d c = 0.5 * (P.colwise().minCoeff() + P.colwise().maxCoeff());
-  return P.rowwise() - c;
-}
+Positions centred(const Positions& P) { return P.rowwise() - bounding_box_centre(P).transpose(); }
 }  // namespace
 
 DetailDistortionMetric::DetailDistortionMetric(const Positions& rest, const Faces& F, const Region& region,

@@ -11,8 +11,9 @@
 
 #include "msdeform/core/errors.h"
 #include "msdeform/core/memory.h"
-#include "msdeform/core/region.h"
+#include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
+#include "msdeform/core/region.h"
 
 namespace msd {
 namespace {
@@ -302,7 +303,7 @@ double signed_volume(const Positions& P, const Faces& F) {
   // Tetrahedra from the bounding box's centre, not the origin: the same sum for a closed mesh, without
   // the cancellation of terms of size |p|³ (the knight at an offset of 1e6 read −199.8 for 0.0245).
   if (P.rows() == 0) return 0;
-  const Vec3 o = (P.colwise().minCoeff() + P.colwise().maxCoeff()).transpose() / 2;
+  const Vec3 o = bounding_box_centre(P);
   double six_volume = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const Vec3 a = P.row(F(f, 0)).transpose() - o, b = P.row(F(f, 1)).transpose() - o,

@@ -269,6 +269,11 @@ VertexFaces vertex_faces(const Faces& F, int num_vertices) {
   return out;
 }
 
+Vec3 bounding_box_centre(const Positions& P) {
+  if (P.rows() == 0) return Vec3::Zero();
+  return (0.5 * (P.colwise().minCoeff() + P.colwise().maxCoeff())).transpose();
+}
+
 double bounding_box_diagonal(const Positions& P) {
   if (P.rows() < 2) return 0.0;
   const Vec3 span = P.colwise().maxCoeff() - P.colwise().minCoeff();

@@ -80,5 +80,8 @@ VertexFaces vertex_faces(const Faces& F, int num_vertices);
 
 //! Axis-aligned bounding box diagonal length of P (0 for fewer than two points).
 double bounding_box_diagonal(const Positions& P);
+//! Centre of P's axis-aligned bounding box (zero for no points): the origin that keeps a model far from the
+//! world origin at its precision in the computations relative to it.
+Vec3 bounding_box_centre(const Positions& P);
 
 }  // namespace msd

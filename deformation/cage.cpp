@@ -11,6 +11,7 @@
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
 #include "msdeform/core/extent.h"
+#include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/core/solver.h"
 #include "msdeform/core/subdivision.h"
@@ -21,11 +22,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-double bbox_diagonal(const Positions& P) {
-  if (P.rows() == 0) return 0;
-  return (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm();
-}
-
 inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 // What is wrong with a cage's topology or geometry, or "" when it is a closed, edge-manifold, consistently
@@ -35,7 +31,7 @@ std::string cage_problem(const Positions& P, const Faces& F, double* volume) {
   if (nv < 4 || nf < 4)
     return "a closed cage needs at least 4 vertices and 4 faces (got " + std::to_string(nv) + " and " +
            std::to_string(nf) + ")";
-  const double diag = bbox_diagonal(P);
+  const double diag = bounding_box_diagonal(P);
   std::vector<char> used(nv, 0);
   std::map<std::pair<int, int>, int> directed;  // (from, to) -> face
   double vol = 0;
@@ -78,7 +74,7 @@ MeanValueCage::MeanValueCage(const Positions& cage_P, const Faces& cage_F) : P_(
   check_mesh_arrays(cage_P, cage_F, "mean value coordinates");
   if (cage_P.rows() == 0 || cage_F.rows() == 0)
     throw InvalidInput("mean value coordinates: the cage is empty");
-  const double diag = bbox_diagonal(cage_P);
+  const double diag = bounding_box_diagonal(cage_P);
   tol_ = 1e-13 * diag;
   centre_ = cage_P.colwise().mean().transpose();
   scale_ = diag > 0 ? diag : 1.0;
@@ -608,7 +604,7 @@ void kdop_cage_near_origin(const Positions& P, double margin, int subdivisions, 
   if (subdivisions < 0 || subdivisions > 4)
     throw InvalidInput(std::string(who) + ": subdivisions must be in 0..4 (got " +
                        std::to_string(subdivisions) + ")");
-  const double diag = bbox_diagonal(P);
+  const double diag = bounding_box_diagonal(P);
   if (!(diag > 0)) throw InvalidInput(std::string(who) + ": all points coincide; a cage needs an extent");
   const double offset = margin * diag, tol = 1e-9 * diag;
   const Vec3 lo = Vec3(P.colwise().minCoeff()) - Vec3::Constant(offset);
@@ -738,8 +734,7 @@ void offset_kdop_cage(const Positions& P, double margin, int subdivisions, Posit
   // Built around the bounding box's centre: the support values d·x of a model far from the origin
   // (1e8 away) would lose the margin and the clipping tolerance to rounding.
   check_finite(P, "offset_kdop_cage", "the points");
-  const Eigen::RowVector3d centre =
-      P.rows() > 0 ? Eigen::RowVector3d(0.5 * (P.colwise().minCoeff() + P.colwise().maxCoeff())) : Eigen::RowVector3d::Zero();
+  const Eigen::RowVector3d centre = bounding_box_centre(P).transpose();
   kdop_cage_near_origin(P.rowwise() - centre, margin, subdivisions, cage_P, cage_F);
   cage_P.rowwise() += centre;
 }

@@ -28,7 +28,7 @@ void RbfDeformer::fit_basis(const Positions& P, const Region& region) {
   const long nc = static_cast<long>(constrained.size());
   Positions C(nc, 3);
   for (long c = 0; c < nc; ++c) C.row(c) = P.row(constrained[c]);
-  origin_ = 0.5 * (C.colwise().minCoeff() + C.colwise().maxCoeff()).transpose();
+  origin_ = bounding_box_centre(C);
   scale_ = bounding_box_diagonal(C);
   if (!(scale_ > 0)) scale_ = 1;
   // Farthest-point sampling: seeds on each group (the first vertex of every handle and of the fixed

@@ -202,7 +202,7 @@ void SpaceDeformer::do_prepare(const Positions& P, const Faces&, const Region& r
 
   // Handle k's affine basis: the solve of the data (x, y, z, 1) on its vertices, zero elsewhere, with
   // x, y, z relative to the bounding box's centre (a model far from the origin keeps its precision).
-  origin_ = 0.5 * (P.colwise().minCoeff() + P.colwise().maxCoeff()).transpose();
+  origin_ = bounding_box_centre(P);
   const int nc = static_cast<int>(constrained_.size());
   const int cols = 4 * num_handles_;
   Eigen::MatrixXd data = Eigen::MatrixXd::Zero(nc, cols);

@@ -64,7 +64,7 @@ void CameraOptions::apply(const Positions& P, const Region& region, RenderOption
     double enclosing = 0;  // the handles' sphere about centre, and the shape's about its box centre
     for (int v = 0; v < region.num_vertices(); ++v)
       if (region.handle_of(v) >= 0) enclosing = std::max(enclosing, (P.row(v).transpose() - centre).norm());
-    const Vec3 shape_centre = (P.colwise().minCoeff() + P.colwise().maxCoeff()).transpose() / 2;
+    const Vec3 shape_centre = bounding_box_centre(P);
     const double shape = (P.rowwise() - shape_centre.transpose()).rowwise().norm().maxCoeff();
     // The handles and a quarter of their size around them; never a zero sphere (one handle vertex).
     const double radius = std::max(1.25 * enclosing, 0.05 * bounding_box_diagonal(P));

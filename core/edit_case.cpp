@@ -32,7 +32,9 @@ EditCase load_edit_case(const std::string& mesh, const std::string& sel, const s
   TriangleSoup soup = load_soup(mesh, &c.load_report);
   c.P = std::move(soup.P);
   c.F = std::move(soup.F);
-  c.surface_problem = check_surface(c.P, c.F).problem();  // orients the faces where it can
+  const SurfaceCheck surface = check_surface(c.P, c.F);  // orients the faces where it can
+  c.surface_problem = surface.problem();
+  c.load_report.faces_flipped = surface.flipped_faces;
   c.seam_vertices = count_seam_vertices(c.P, c.F);
   const int nv = static_cast<int>(c.P.rows());
   if (!sel.empty()) {
@@ -44,6 +46,9 @@ EditCase load_edit_case(const std::string& mesh, const std::string& sel, const s
     }
   }
   if (!def.empty()) {
+    if (!sel.empty() && c.region.num_handles() == 0)
+      throw InvalidInput(sel + " defines no handle (every vertex fixed or free): there is nothing for " +
+                         def + " to move");
     c.transforms = read_def(def);
     if (!sel.empty() && static_cast<int>(c.transforms.size()) != c.region.num_handles())
       throw InvalidInput(def + " has " + std::to_string(c.transforms.size()) + " matrices but " + sel + " defines " +

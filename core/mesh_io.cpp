@@ -1101,6 +1101,19 @@ void check_mesh_format(const std::string& path, const std::string& who) {
     throw InvalidInput(who + ": " + path + ": unknown format '" + ext + "' (supported: .off .obj .ply .stl)");
 }
 
+std::string faces_changed_on_load(const LoadReport& r) {
+  std::string text;
+  const auto add = [&](int n, const char* one, const char* many, const char* what) {
+    if (n > 0)
+      text += (text.empty() ? "" : ", ") + std::to_string(n) + " " + (n == 1 ? one : many) + " " + what;
+  };
+  add(r.duplicate_faces_dropped, "duplicate face", "duplicate faces", "dropped");
+  add(r.degenerate_faces_skipped, "face repeating a vertex", "faces repeating a vertex", "dropped");
+  add(r.polygons_triangulated, "polygon", "polygons", "triangulated");
+  add(r.faces_flipped, "face", "faces", "turned over to agree with their neighbours");
+  return text;
+}
+
 TriangleSoup load_soup(const std::string& path, LoadReport* report) {
   LoadReport local;
   LoadReport& r = report ? *report : local;

@@ -17,7 +17,8 @@ struct LoadReport {
   int polygons_split_otherwise = 0;  //!< of those, the ones not split into their first corner's fan
   int degenerate_faces_skipped = 0;  //!< faces that repeat a vertex index (dropped)
   int duplicate_faces_dropped = 0;   //!< triangles with the vertex set of an earlier one (dropped)
-  int faces_flipped = 0;             //!< load_mesh: triangles turned over to agree with their neighbours
+  //! load_mesh, load_edit_case: triangles turned over to agree with their neighbours
+  int faces_flipped = 0;
   //! OFF and ASCII PLY: the first line of data after the header's counts (ignored: the file holds more
   //! than its header declares), or 0.
   int first_ignored_line = 0;
@@ -28,6 +29,10 @@ struct LoadReport {
   //! holds positions and triangles); 0 if none.
   int first_attribute_line = 0;
 };
+
+//! What loading changed in the file's faces, in words ("1 duplicate face dropped, 3 polygons triangulated"),
+//! or empty when the faces are the file's own: a written result lists the faces as loaded, so a tool says so.
+std::string faces_changed_on_load(const LoadReport& report);
 
 //! A file's vertices and triangles, whatever they form: a point cloud, a soup, a non-manifold or
 //! inconsistently oriented mesh.

@@ -281,6 +281,9 @@ std::vector<Mat4> read_def(const std::string& path) {
 }
 
 void write_def(const std::vector<Mat4>& transforms, const std::string& path) {
+  if (transforms.empty())
+    throw InvalidInput("write_def: " + path +
+                       ": no transforms to write (a .def holds one 4x4 matrix per handle)");
   for (size_t h = 0; h < transforms.size(); ++h) {  // what read_def refuses is not written
     if (!transforms[h].allFinite())
       throw InvalidInput("write_def: " + path + ": matrix " + std::to_string(h) + " has a non-finite entry");

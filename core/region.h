@@ -82,8 +82,8 @@ Region read_dmat_groups(const std::string& path, int num_vertices);
 //! line holds another count (a row split over lines), a number is malformed or non-finite, or a last row
 //! is not (0 0 0 1).
 std::vector<Mat4> read_def(const std::string& path);
-//! Writes transforms as a .def file (atomically). \throw InvalidInput for what read_def refuses (a
-//! non-finite entry, a last row other than 0 0 0 1), before anything is written.
+//! Writes transforms as a .def file (atomically). \throw InvalidInput for what read_def refuses (no
+//! transforms, a non-finite entry, a last row other than 0 0 0 1), before anything is written.
 void write_def(const std::vector<Mat4>& transforms, const std::string& path);
 
 //! Vertices inside the axis-aligned box [lo, hi] (infinite corners allowed). \throw InvalidInput for a NaN

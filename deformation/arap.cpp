@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
@@ -48,8 +49,8 @@ ArapDeformer::ArapDeformer(ArapOptions options) : options_(options) {
   if (options_.anderson < 0 || options_.anderson > 8)
     throw InvalidInput("arap: anderson must lie in [0, 8] (got " + std::to_string(options_.anderson) + ")");
   if (!(options_.min_weight_ratio > 0 && options_.min_weight_ratio <= 1))
-    throw InvalidInput("arap: min_weight_ratio must lie in (0, 1] (got " + std::to_string(options_.min_weight_ratio) +
-                       ")");
+    throw InvalidInput("arap: min_weight_ratio must lie in (0, 1] (got " +
+                       format_number(options_.min_weight_ratio) + ")");
 }
 
 DeformerTraits ArapDeformer::traits() const {

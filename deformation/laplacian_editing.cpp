@@ -6,6 +6,7 @@
 
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/deformation/propagation.h"
@@ -45,11 +46,12 @@ void LaplacianEditing::check_scale(const Positions& out) {
   const double scale = free_edges_.mean_scale(out);
   if (!(scale <= kMaxMeanScale))
     frame_report_.warnings.push_back(
-        name_ + ": the edges around the free vertices changed length by a factor " + std::to_string(scale) +
+        name_ + ": the edges around the free vertices changed length by a factor " + format_number(scale) +
         " on average (grown or shrunk): " +
-        (options_.implicit ? "the linearised rotations of implicit Laplacian editing scale the surface under large "
-                             "rotations (seed 9.4.2); use gradient, multiscale or the explicit variant"
-                           : "the edit stretches the free region"));
+        (options_.implicit
+             ? "the linearised rotations of implicit Laplacian editing scale the surface under large "
+               "rotations (seed 9.4.2); use gradient, multiscale or the explicit variant"
+             : "the edit stretches the free region"));
 }
 
 void LaplacianEditing::prepare_implicit(const Positions& P, const Faces& F, const Region& region) {

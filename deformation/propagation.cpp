@@ -6,6 +6,7 @@
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/kd_tree.h"
 #include "msdeform/core/laplacian.h"
 #include "msdeform/core/parallel.h"
@@ -156,7 +157,7 @@ void TransformationPropagation::do_prepare(const Positions& P, const Faces& F, c
         } else {
           v = options_.custom_transfer(s);
           if (!(v >= 0.0 && v <= 1.0))
-            throw InvalidInput("propagate: custom_transfer(" + std::to_string(s) + ") = " + std::to_string(v) +
+            throw InvalidInput("propagate: custom_transfer(" + format_number(s) + ") = " + format_number(v) +
                                " at vertex " + std::to_string(i) + " (handle " + std::to_string(k) +
                                "); a transfer function must map [0, 1] into [0, 1]");
         }

@@ -86,6 +86,9 @@ EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {
                    "vertices here (.ply, .off and .obj keep the file's numbering)\n",
                    mesh.c_str());
     c = load_edit_case(mesh, sel, transforms_from_file ? def : std::string());
+    if (const std::string changed = faces_changed_on_load(c.load_report); !changed.empty())
+      std::fprintf(stderr, "note: %s: %s; the meshes written list the faces as loaded\n", mesh.c_str(),
+                   changed.c_str());
     if (built_region) c.region = region.build_region(c.P, c.F);
     if (transforms_from_file && built_region && static_cast<int>(c.transforms.size()) != c.region.num_handles())
       throw InvalidInput(def + " has " + std::to_string(c.transforms.size()) + " matrices but --handle selected " +

@@ -183,6 +183,10 @@ def test_a_python_transfer_function(lift):
         msdeform.Deformer("propagate", transfer=lambda s: 1 / 0).prepare(lift.V, lift.F, lift.labels)
     with pytest.raises(TypeError, match=r"option transfer: the callable must return a number"):
         msdeform.Deformer("propagate", transfer=lambda s: "half").prepare(lift.V, lift.F, lift.labels)
+    # A value out of [0, 1] is named in a few digits (1e300 was printed with 301).
+    with pytest.raises(ValueError, match=r"\) = 1e\+300 at vertex \d+ .*must map \[0, 1\] into \[0, 1\]") as e:
+        msdeform.Deformer("propagate", transfer=lambda s: 1e300).prepare(lift.V, lift.F, lift.labels)
+    assert len(str(e.value)) < 200
 
 
 def test_unknown_method_and_options_are_refused_by_name():

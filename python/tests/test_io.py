@@ -96,7 +96,11 @@ def test_read_def_refuses_a_matrix_that_is_not_affine(tmp_path):
     nan[0, 3] = np.nan
     with pytest.raises(ValueError, match="matrix 0 has a non-finite entry"):
         msdeform.write_def(tmp_path / "nan.def", nan)
+    # No transforms at all: read_def refuses such a file, so write_def does not write it (it did).
+    with pytest.raises(ValueError, match="no transforms to write"):
+        msdeform.write_def(tmp_path / "none.def", [])
     assert not (tmp_path / "ones.def").exists() and not (tmp_path / "nan.def").exists()
+    assert not (tmp_path / "none.def").exists()
 
 
 def test_dmat_groups_are_free_and_handles(tmp_path):

@@ -170,6 +170,21 @@ grep -q "detail scale candidate 1 of at most" err.txt || { cat err.txt; fail "de
 grep -q "note: two edits are named lift; the --mesh is called lift-2 here" err.txt || { cat err.txt; fail "no rename note"; }
 [ -f cmp-clash/meshes/lift--shell.ply ] && [ -f cmp-clash/meshes/lift-2--shell.ply ] ||
   { ls cmp-clash/meshes; fail "the clashing edits do not have their own mesh files"; }
+# Faces the loader drops are said: the output lists fewer faces than the file (it was silent).
+printf 'OFF\n5 5 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 0\n3 0 1 4\n3 1 2 4\n3 2 3 4\n3 3 0 4\n3 2 4 1\n' >dup.off
+"$msdeform" deform dup.off --fixed vertex:0,0 --fixed vertex:1,0 --handle vertex:2,0 --translate 0,0,0.1 \
+  -o dup-out.off >out.txt 2>err.txt || { cat err.txt; fail "deform with a duplicate face"; }
+grep -q "note: dup.off: 1 duplicate face dropped; the meshes written list the faces as loaded" err.txt ||
+  { cat err.txt; fail "deform did not say the loader dropped a duplicate face"; }
+# A region without a handle and a .def: the region is named (the message blamed the empty .def).
+printf '0\n0\n1\n1\n1\n' >nohandle.sel
+printf '# none\n' >nohandle.def
+expect_error 1 "nohandle.sel defines no handle (every vertex fixed or free): there is nothing for nohandle.def to move" \
+  "$msdeform" deform dup.off --sel nohandle.sel --def nohandle.def -o nohandle.off
+# render refuses a mesh at one point, as deform does (it wrote a blank picture).
+printf 'OFF\n3 1 0\n1 1 1\n1 1 1\n1 1 1\n3 0 1 2\n' >point.off
+expect_error 1 "render: point.off: the input has no extent" "$msdeform" render point.off -o point.png
+[ -e point.png ] && fail "render wrote a picture of a mesh with no extent"
 # compare --methods multiscale, as deform's --method takes it, runs every encoding (it was an unknown method).
 "$msdeform" compare -q --resolution 300 --mesh lift.off --sel lift.sel --def lift.def --methods multiscale,shell \
   -o cmp-multiscale >out.txt 2>err.txt || { cat err.txt; fail "compare --methods multiscale"; }

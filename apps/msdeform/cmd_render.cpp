@@ -43,9 +43,8 @@ void add_render_command(CLI::App& app) {
   cmd->callback([=] {
     check_picture_output(*output, "-o");
     const EditCase c = edit->load(/*need_transforms=*/false, /*need_region=*/false);
-    check_extent(
-        c.P, "render: " +
-                 (c.path.empty() ? c.name : c.path));  // a mesh at one point frames nothing (a blank picture)
+    // A mesh at one point frames nothing: a blank picture.
+    check_extent(c.P, "render: " + (c.path.empty() ? c.name : c.path));
     RenderOptions o;
     o.width = (*size)[0];
     o.height = (*size)[1];

@@ -877,11 +877,9 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
             self.deformer->set_initial_guess(G);
           },
           py::arg("X"),
-          "Iterative methods with traits.initial_guess: the next frame starts from X ((#V, 3) float64, "
-          "copied) "
+          "Iterative methods with traits.initial_guess: the next frame starts from X ((#V, 3) float64, copied) "
           "instead of the last result; arap takes X only where its energy is below its cold start's "
-          "(frame_report.start says which start it took). Raises msdeform.UsageError (RuntimeError) for "
-          "other methods or before "
+          "(frame_report.start says which start it took). Raises msdeform.UsageError (RuntimeError) for other methods or before "
           "prepare(), ValueError for a wrong shape or a non-finite value.")
       .def(
           "reset",
@@ -890,8 +888,7 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
             Busy busy(self);
             self.deformer->reset();
           },
-          "Back to the rest pose: an iterative method's next frame starts from rest, a space method's map is "
-          "the "
+          "Back to the rest pose: an iterative method's next frame starts from rest, a space method's map is the "
           "identity, the frame report is cleared; factorisations are kept.")
       .def(
           "evaluate",
@@ -916,8 +913,7 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
           "name", [](py::handle obj) { return live(obj).deformer->name(); }, "the method's catalogue name")
       .def_property_readonly(
           "traits", [](py::handle obj) { return live(obj).deformer->traits(); },
-          "DeformerTraits: domain, solve, vertex_targets, initial_guess, exact_constraints, "
-          "reproduces_rigid_motions")
+          "DeformerTraits: domain, solve, vertex_targets, initial_guess, exact_constraints, reproduces_rigid_motions")
       .def_property_readonly(
           "frame_report",
           [](py::handle obj) {
@@ -936,8 +932,7 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
           },
           "what prepare() found that the user should know, each naming a remedy (a list of str)")
       .def_property_readonly(
-          "prepared", [](py::handle obj) { return live(obj).deformer->prepared(); },
-          "whether prepare() succeeded")
+          "prepared", [](py::handle obj) { return live(obj).deformer->prepared(); }, "whether prepare() succeeded")
       .def_property_readonly(
           "num_vertices", [](py::handle obj) { return live(obj).deformer->num_vertices(); },
           "#V of the prepared shape (0 before prepare)")
@@ -950,8 +945,7 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
             PyDeformer& self = live(obj);
             py::dict d;
             for (const Option& o : options_table())
-              if (const std::string* g = matching_group(o, self.groups))
-                d[py::str(o.name)] = o.get(self.settings, *g);
+              if (const std::string* g = matching_group(o, self.groups)) d[py::str(o.name)] = o.get(self.settings, *g);
             return py::module_::import("msdeform._helpers").attr("Options")(d);
           },
           "the values of every option this method reads (a dict whose items cannot be changed; defaults "
@@ -966,8 +960,7 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
             Busy busy(self);
             return py::make_tuple(msd::Positions(ms->base()), msd::Faces(ms->base_faces()));
           },
-          "multiscale methods after prepare(): the smooth base (B (#Vb, 3) float64, FB (#Fb, 3) int32), "
-          "copies; "
+          "multiscale methods after prepare(): the smooth base (B (#Vb, 3) float64, FB (#Fb, 3) int32), copies; "
           "else None")
       .def_property_readonly(
           "detail_scale",
@@ -977,8 +970,7 @@ msdeform.UsageError, a RuntimeError). Raises ValueError for a row count other th
             if (!ms || !self.deformer->prepared()) return py::none();
             return py::float_(ms->decomposition_report().low_pass.detail_scale);
           },
-          "multiscale methods after prepare(): the detail scale used (mesh units; 0: no detail layer, B = "
-          "S); "
+          "multiscale methods after prepare(): the detail scale used (mesh units; 0: no detail layer, B = S); "
           "else None")
       .def("__repr__", [](py::handle obj) {
         PyDeformer& self = live(obj);

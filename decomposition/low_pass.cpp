@@ -318,7 +318,8 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
 
   // Far beyond the diameter the filter keeps only S's affine part, and (L/2π)⁴ overflows the system's
   // entries long before L reaches the largest double.
-  if (const double size = diameter(S); options.detail_scale > kMaxScaleOverDiameter * size)
+  const double size = diameter(S);
+  if (options.detail_scale > kMaxScaleOverDiameter * size)
     throw InvalidInput(std::string(kWho) + ": the detail scale " + format_number(options.detail_scale) +
                        " is more than " + format_number(kMaxScaleOverDiameter) + " times the mesh's diameter " +
                        format_number(size) + " (mesh units); a detail scale is a feature length on the mesh");
@@ -339,7 +340,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
     r.iterations = system.iterations();
     r.check = check_details(S, B, F);
     if (r.check.rms_height <=
-        noise_height(S, diameter(S))) {  // far below the edge length: the solve's rounding alone
+        noise_height(S, size)) {  // far below the edge length: the solve's rounding alone
       r.no_layer_reason = "the detail scale " + format_number(r.detail_scale) +
                           " removes nothing measurable (rms detail height " +
                           format_number(r.check.rms_height) + ", rounding; the mean edge length is " +
@@ -349,8 +350,7 @@ Positions low_pass_base(const Positions& S, const Faces& F, const LowPassOptions
     }
   } else {
     r.automatic = true;
-    const double size = diameter(S), smallest = 4 * r.mean_edge_length,
-                 largest = options.max_scale_fraction * size;
+    const double smallest = 4 * r.mean_edge_length, largest = options.max_scale_fraction * size;
     const double noise = noise_height(S, size);
     const double area = face_areas(S, F).sum();
     const long allowed_folds = static_cast<long>(kDefectFraction * static_cast<double>(S.rows()));

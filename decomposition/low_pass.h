@@ -97,6 +97,10 @@ struct LowPassReport {
            : automatic  ? "--detail-scale sets one"
                         : "a larger --detail-scale (or 0, the automatic scale) sets one";
   }
+  //! no_layer_reason followed by "; " and no_layer_remedy() where there is one.
+  std::string no_layer_explanation() const {
+    return all_boundary ? no_layer_reason : no_layer_reason + "; " + no_layer_remedy();
+  }
   double seconds = 0;  //!< of the computation (also when the base came from a LowPassCache)
   //! Conjugate-gradient iterations of the last system solved (the returned base's, or the last candidate's
   //! of the automatic choice); 0 where it was factored (LowPassSolver).

@@ -180,10 +180,9 @@ void add_deform_command(CLI::App& app) {
         std::printf("  base: low-pass at detail scale %.4g (%s)\n", d.low_pass.detail_scale,
                     d.low_pass.automatic ? "chosen automatically; --detail-scale sets it" : "given");
       else if (low_pass)
-        std::printf("  base: %s, no separate detail layer (%s%s%s)\n",
+        std::printf("  base: %s, no separate detail layer (%s)\n",
                     d.kind == DecompositionKind::Remeshed ? "the mesh remeshed" : "the mesh itself",
-                    d.low_pass.no_layer_reason.c_str(), d.low_pass.all_boundary ? "" : "; ",
-                    d.low_pass.no_layer_remedy());
+                    d.low_pass.no_layer_explanation().c_str());
       else if (d.kind == DecompositionKind::Fairing)
         std::printf("  base: faired free region\n");
       else

@@ -72,9 +72,8 @@ void add_render_command(CLI::App& app) {
         std::printf("details over a low-pass base at scale %.4g: heights in [%.4g, %.4g]\n", report.detail_scale,
                     heights.minCoeff() + 0.0, heights.maxCoeff() + 0.0);  // + 0.0: no "-0"
       else
-        std::printf("no detail layer (%s%s%s), so the base is the mesh itself and every height is 0\n",
-                    report.no_layer_reason.c_str(), report.all_boundary ? "" : "; ",
-                    report.no_layer_remedy());
+        std::printf("no detail layer (%s), so the base is the mesh itself and every height is 0\n",
+                    report.no_layer_explanation().c_str());
     } else if (mode == "rigidity") {
       if (rest->empty()) throw InvalidInput("--color rigidity measures against a rest shape: give --rest REST");
       const TriangleSoup r = load_soup(*rest);

@@ -480,6 +480,7 @@ void add_compare_command(CLI::App& app) {
       for (const char* name : {"plane", "cylinder", "bar", "cactus"}) {
         const std::string base = (fs::path(a->survey) / name).string();
         cases.push_back(file_case(base + ".off", base + ".sel", base + ".def"));
+        note_faces_changed(cases.back(), base + ".off");
       }
     // Edits are told apart by name (rows, pictures, mesh files): a --mesh or survey file named like a
     // built-in scene or like another file gets a suffix (they were merged, and one's files overwritten).

@@ -86,9 +86,7 @@ EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {
                    "vertices here (.ply, .off and .obj keep the file's numbering)\n",
                    mesh.c_str());
     c = load_edit_case(mesh, sel, transforms_from_file ? def : std::string());
-    if (const std::string changed = faces_changed_on_load(c.load_report); !changed.empty())
-      std::fprintf(stderr, "note: %s: %s; the meshes written list the faces as loaded\n", mesh.c_str(),
-                   changed.c_str());
+    note_faces_changed(c, mesh);
     if (built_region) c.region = region.build_region(c.P, c.F);
     if (transforms_from_file && built_region && static_cast<int>(c.transforms.size()) != c.region.num_handles())
       throw InvalidInput(def + " has " + std::to_string(c.transforms.size()) + " matrices but --handle selected " +
@@ -108,6 +106,12 @@ EditCase EditCaseOptions::load(bool need_transforms, bool need_region) const {
 void EditCaseOptions::write_built(const Region& built_region, const std::vector<Mat4>& transforms) const {
   if (!region.write_sel.empty()) write_sel(built_region, region.write_sel);
   if (!region.write_def.empty()) write_def(transforms, region.write_def);
+}
+
+void note_faces_changed(const EditCase& c, const std::string& mesh) {
+  if (const std::string changed = faces_changed_on_load(c.load_report); !changed.empty())
+    std::fprintf(stderr, "note: %s: %s; the meshes written list the faces as loaded\n", mesh.c_str(),
+                 changed.c_str());
 }
 
 }  // namespace msd::cli

@@ -36,4 +36,8 @@ struct EditCaseOptions {
   void write_built(const Region& region, const std::vector<Mat4>& transforms) const;
 };
 
+// Says on stderr ("note: FILE: …") when loading `c` from mesh file `mesh` dropped or re-wound faces
+// (faces_changed_on_load), so that the meshes a command writes are not taken for the file's faces.
+void note_faces_changed(const EditCase& c, const std::string& mesh);
+
 }  // namespace msd::cli

@@ -176,6 +176,17 @@ printf 'OFF\n5 5 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 0\n3 0 1 4\n3 1 2 4\n3 2
   -o dup-out.off >out.txt 2>err.txt || { cat err.txt; fail "deform with a duplicate face"; }
 grep -q "note: dup.off: 1 duplicate face dropped; the meshes written list the faces as loaded" err.txt ||
   { cat err.txt; fail "deform did not say the loader dropped a duplicate face"; }
+# The same note for the files of compare --survey (it was silent there).
+mkdir survey-dup
+for name in plane cylinder bar cactus; do
+  cp lift.off "survey-dup/$name.off"; cp lift.sel "survey-dup/$name.sel"; cp lift.def "survey-dup/$name.def"
+done
+tail -n 1 lift.off >>survey-dup/bar.off  # the last face again
+sed -i "2s/^\([0-9]*\) \([0-9]*\)/\1 $(($(sed -n 2p lift.off | cut -d' ' -f2) + 1))/" survey-dup/bar.off
+"$msdeform" compare -q --survey survey-dup --methods propagate -o cmp-survey-dup >out.txt 2>err.txt ||
+  { cat err.txt; fail "compare --survey with a duplicate face"; }
+grep -q "note: survey-dup/bar.off: 1 duplicate face dropped" err.txt ||
+  { cat err.txt; fail "compare --survey did not say the loader dropped a duplicate face"; }
 # A region without a handle and a .def: the region is named (the message blamed the empty .def).
 printf '0\n0\n1\n1\n1\n' >nohandle.sel
 printf '# none\n' >nohandle.def

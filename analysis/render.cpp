@@ -169,9 +169,9 @@ struct Camera {
   }
 };
 
-// Camera for the centred positions Pc (bounding-box centre at the origin, everything drawn within radius),
-// each drawn as a sphere of radius pad (0 for the vertices of faces).
-Camera frame_camera(const Positions& Pc, double radius, double pad, const Vec3& centre,
+// Camera for the traced positions Pc (P − centre in units of `unit`, everything drawn within radius), each
+// drawn as a sphere of radius pad (0 for the vertices of faces).
+Camera frame_camera(const Positions& Pc, double radius, double pad, const Vec3& centre, double unit,
                     const RenderOptions& o, int view_width) {
   Camera cam;
   const Vec3 to_eye = o.view_direction.normalized();
@@ -190,8 +190,8 @@ Camera frame_camera(const Positions& Pc, double radius, double pad, const Vec3& 
   if (o.framing == Framing::BoundingSphere) {
     // A sphere at distance d subtends a half-angle asin(r / d): fit it to the narrower field.
     const bool given = o.sphere_radius > 0;
-    const Vec3 target = given ? Vec3(o.sphere_center - centre) : Vec3::Zero();
-    const double r = given ? o.sphere_radius : radius;
+    const Vec3 target = given ? Vec3((o.sphere_center - centre) / unit) : Vec3::Zero();
+    const double r = given ? o.sphere_radius / unit : radius;
     const double half_angle = std::atan(std::min(cam.tan_v, cam.tan_h));
     cam.eye = target + to_eye * (1.04 * r / std::sin(half_angle));
     return cam;
@@ -405,11 +405,17 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
   const double point_radius = !points ? 0.0 : o.point_radius > 0 ? o.point_radius : default_point_radius(P);
 
   // Everything is traced relative to the bounding-box centre, which keeps Embree's floats accurate for
-  // meshes far from the origin.
+  // meshes far from the origin, and in units of the largest centred coordinate: Embree's single-precision
+  // products of coordinates underflowed below a size of about 1e-15 and overflowed beyond 1e19 (an empty
+  // picture), and its shading was striped from 1e15.
   const Vec3 lo = P.colwise().minCoeff().transpose(), hi = P.colwise().maxCoeff().transpose();
   const Vec3 centre = 0.5 * (lo + hi);
-  const Positions Pc = P.rowwise() - centre.transpose();
-  double radius = Pc.rowwise().norm().maxCoeff() + point_radius;
+  Positions Pc = P.rowwise() - centre.transpose();
+  double unit = std::max(Pc.cwiseAbs().maxCoeff(), point_radius);
+  if (!(unit > 0) || !std::isfinite(unit)) unit = 1;
+  Pc /= unit;
+  const double pad = point_radius / unit;  // a point's sphere, traced
+  double radius = Pc.rowwise().norm().maxCoeff() + pad;
   if (!(radius > 0)) radius = 1;
   // Vertex normals of the faces wound consistently where the surface allows (check_surface turns a copy
   // over): a soup's faces may come in either winding, and a normal summed over opposite windings would
@@ -418,9 +424,9 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
   if (!points) {
     Faces oriented = F;
     check_surface(P, oriented);
-    N = vertex_normals(P, oriented);
+    N = vertex_normals(Pc, oriented);
   }
-  const EmbreeScene scene(Pc, F, point_radius);
+  const EmbreeScene scene(Pc, F, pad);
 
   Legend legend;
   if (o.vertex_scalar) {
@@ -437,7 +443,7 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
   }
   const int view_width = o.width - (legend.shown ? legend.panel_width : 0);
 
-  const Camera cam = frame_camera(Pc, radius, point_radius, centre, o, view_width);
+  const Camera cam = frame_camera(Pc, radius, pad, centre, unit, o, view_width);
 
   // Head light from the eye, key light from the upper left (in camera terms, so every view is lit alike).
   const Vec3 key = (-0.6 * cam.right + 0.7 * cam.up - 0.4 * cam.forward).normalized();
@@ -499,7 +505,7 @@ Image render(const Positions& P, const Faces& F, const RenderOptions& o) {
     if (n.dot(view) < 0) n = -n;
     const Vec3 centre_i = Pc.row(i).transpose();
     const Vec3 albedo = scalar ? albedo_of((*scalar)[i]) : colors ? to_linear(colors->row(i).transpose()) : base;
-    return light(centre_i + point_radius * n, n, n, view, albedo);
+    return light(centre_i + pad * n, n, n, view, albedo);
   };
 
   Image image(o.width, o.height);

@@ -82,6 +82,29 @@ TEST_CASE("render: the bumpy plane fills the view, is lit, and is written as PNG
   CHECK(read_file(dir.file("again.png"), "test") == png);  // deterministic
 }
 
+TEST_CASE("render: the picture does not depend on the mesh's size or place", "[analysis][render]") {
+  // A break test: at sizes below about 1e-15 or beyond 1e19 the picture was the background alone (exit 0),
+  // from 1e15 its shading striped: Embree's single-precision products of coordinates under- and overflowed.
+  const Scene s = plane(2000);
+  RenderOptions o;
+  o.width = 160;
+  o.height = 120;
+  const Image reference = render(s.P, s.F, o);
+  REQUIRE(covered_fraction(reference, o) > 0.2);
+  for (const double scale : {1e-60, 1e-15, 1e15, 1e20, 1e60}) {
+    for (const double offset : {0.0, 1e6}) {
+      CAPTURE(scale, offset);
+      const Positions P = (s.P.array() + offset) * scale;
+      const Image image = render(P, s.F, o);
+      long differ = 0;
+      for (int y = 0; y < o.height; ++y)
+        for (int x = 0; x < o.width; ++x)
+          if ((at(image, x, y) - at(reference, x, y)).cwiseAbs().maxCoeff() > 2) ++differ;
+      CHECK(differ <= o.width * o.height / 200);  // 0.5 %: rounding at the outline
+    }
+  }
+}
+
 TEST_CASE("render: a scalar field is colour-mapped with a legend", "[analysis][render]") {
   const Scene s = plane();
   RenderOptions o;

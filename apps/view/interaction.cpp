@@ -31,8 +31,14 @@ Vec3 any_perpendicular(const Vec3& n) {
 
 void OrbitCamera::frame(const Positions& P, const Vec3& up, const Vec3& view_direction, int width, int height) {
   const Vec3 lo = P.colwise().minCoeff().transpose(), hi = P.colwise().maxCoeff().transpose();
-  target_ = 0.5 * (lo + hi);
-  radius_ = std::max(std::sqrt((P.rowwise() - target_.transpose()).rowwise().squaredNorm().maxCoeff()), 1e-12);
+  target_ = origin_ = 0.5 * (lo + hi);
+  unit_ = 0.5 * (hi - lo).maxCoeff();
+  if (!(unit_ > 0) || !std::isfinite(unit_)) unit_ = 1;
+  // In frame units first: the squares of coordinates below 1e-154 underflowed (the view then framed a
+  // radius of 1e-12 around a far smaller shape).
+  radius_ =
+      unit_ * std::sqrt(((P.rowwise() - origin_.transpose()) / unit_).rowwise().squaredNorm().maxCoeff());
+  if (!(radius_ > 0)) radius_ = unit_;
   up_ = up.normalized();
   Vec3 d = view_direction.norm() > 0 ? view_direction.normalized() : Vec3(-0.6, -1.0, 0.8).normalized();
   Vec3 horizontal = d - d.dot(up_) * up_;
@@ -105,6 +111,29 @@ Mat4 OrbitCamera::projection_matrix() const {
   M(2, 3) = 2 * far * near / (near - far);
   M(3, 2) = -1;
   return M;
+}
+
+Mat4 OrbitCamera::frame_view_matrix() const {
+  Mat4 to_world = Mat4::Identity();  // T(origin) S(unit)
+  to_world.topLeftCorner<3, 3>() *= unit_;
+  to_world.topRightCorner<3, 1>() = origin_;
+  Mat4 to_frame_units = Mat4::Identity();  // S(1 / unit)
+  to_frame_units.topLeftCorner<3, 3>() /= unit_;
+  return to_frame_units * view_matrix() * to_world;
+}
+
+Mat4 OrbitCamera::frame_projection_matrix() const {
+  Mat4 M = projection_matrix();
+  M.leftCols<3>() *= unit_;  // projection S(unit): eye space in frame units
+  return M / unit_;
+}
+
+void drawing_positions(const OrbitCamera& camera, const Positions& X, std::vector<float>& out) {
+  out.resize(static_cast<size_t>(X.size()));
+  const Vec3& origin = camera.frame_origin();
+  const double unit = camera.frame_unit();
+  for (Eigen::Index v = 0; v < X.rows(); ++v)
+    for (int k = 0; k < 3; ++k) out[3 * v + k] = static_cast<float>((X(v, k) - origin[k]) / unit);
 }
 
 Vec3 OrbitCamera::project(const Vec3& p) const { return project(projection_matrix() * view_matrix(), p); }

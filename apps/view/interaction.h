@@ -38,6 +38,15 @@ class OrbitCamera {
   // Column-major 4×4 OpenGL matrices (right-handed view, perspective projection).
   Mat4 view_matrix() const;
   Mat4 projection_matrix() const;
+  // The drawing frame set by frame(): positions go to OpenGL as (p − frame_origin()) / frame_unit() in
+  // single precision, and these matrices take such positions to clip space (the view to eye space in
+  // frame units, the projection divided by the unit: homogeneous, so the same pixels and depths). Floats
+  // then keep their digits at any size and place (raw coordinates lost them 1e6 sizes from the origin and
+  // under- or overflowed in the products below 1e-19 or beyond 1e19).
+  const Vec3& frame_origin() const { return origin_; }
+  double frame_unit() const { return unit_; }
+  Mat4 frame_view_matrix() const;
+  Mat4 frame_projection_matrix() const;
   // Pixel coordinates and window depth of world point p (depth outside [0, 1] when it is clipped).
   Vec3 project(const Vec3& p) const;
   // The same with projection_matrix() * view_matrix() computed once by the caller.
@@ -53,9 +62,16 @@ class OrbitCamera {
   Vec3 up_ = Vec3::UnitZ(), front_ = Vec3::UnitY(), side_ = Vec3::UnitX();  // world axes, side = front × up
   Vec3 target_ = Vec3::Zero();
   double yaw_ = 0, pitch_ = 0.5, distance_ = 3, radius_ = 1;
+  Vec3 origin_ = Vec3::Zero();
+  double unit_ = 1;
   double fov_degrees_ = 35;
   int width_ = 800, height_ = 600;
 };
+
+// Positions X (#V×3) as the viewer hands them to OpenGL, row by row into out (resized to 3·#V): in the
+// camera's drawing frame, (p − frame_origin()) / frame_unit() in single precision, for the matrices
+// frame_view_matrix() and frame_projection_matrix().
+void drawing_positions(const OrbitCamera& camera, const Positions& X, std::vector<float>& out);
 
 // The gizmo on the active handle, drawn as three axis arrows (x red, y green, z blue) and a centre disc.
 enum class GizmoMode { Translate, Rotate };

@@ -513,11 +513,14 @@ void Viewer::recolor() {
 
 void Viewer::upload_positions() {
   normals_.compute(X_, N_);
-  upload_.resize(X_.size());
   for (int b = 0; b < 2; ++b) {
-    const Positions& A = b == 0 ? X_ : N_;
-    for (Eigen::Index v = 0; v < A.rows(); ++v)
-      for (int k = 0; k < 3; ++k) upload_[3 * v + k] = static_cast<float>(A(v, k));
+    if (b == 0) {
+      drawing_positions(camera_, X_, upload_);
+    } else {
+      upload_.resize(N_.size());
+      for (Eigen::Index v = 0; v < N_.rows(); ++v)
+        for (int k = 0; k < 3; ++k) upload_[3 * v + k] = static_cast<float>(N_(v, k));
+    }
     glBindBuffer(GL_ARRAY_BUFFER, buffers_[b]);
     glBufferSubData(GL_ARRAY_BUFFER, 0, upload_.size() * sizeof(float), upload_.data());
   }
@@ -638,7 +641,8 @@ void Viewer::draw_scene() {
   glViewport(kPanelWidth, 0, camera_.width(), camera_.height());
   glEnable(GL_DEPTH_TEST);
   glUseProgram(program_);
-  const Eigen::Matrix4f V = camera_.view_matrix().cast<float>(), Pm = camera_.projection_matrix().cast<float>();
+  const Eigen::Matrix4f V = camera_.frame_view_matrix().cast<float>(),
+                        Pm = camera_.frame_projection_matrix().cast<float>();
   glUniformMatrix4fv(glGetUniformLocation(program_, "view"), 1, GL_FALSE, V.data());
   glUniformMatrix4fv(glGetUniformLocation(program_, "projection"), 1, GL_FALSE, Pm.data());
   glUniform1i(glGetUniformLocation(program_, "flat_shading"), flat_shading_ ? 1 : 0);

@@ -64,6 +64,42 @@ TEST_CASE("orbit camera: the target at the centre, the framed shape inside, orbi
   CHECK((screen(camera, old_target) - Vec2(425, 285)).norm() < 1e-6);
 }
 
+TEST_CASE("orbit camera: what OpenGL draws lands where project() says, at any size and place of the shape",
+          "[view]") {
+  // The vertex shader's arithmetic in single precision: projection · (view · (x, 1)), then the window
+  // transform. The viewer uploaded raw coordinates with the plain matrices: a box 1e6 sizes from the
+  // origin lost its digits (float spacing 1e-1 of its size), one of size 1e-20 vanished in the products.
+  const auto drawn = [](const OrbitCamera& camera, const std::vector<float>& positions, int v) {
+    const Eigen::Matrix4f V = camera.frame_view_matrix().cast<float>();
+    const Eigen::Matrix4f P = camera.frame_projection_matrix().cast<float>();
+    const Eigen::Vector4f x(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2], 1.0f);
+    const Eigen::Vector4f clip = P * (V * x);
+    const Eigen::Vector3f ndc = clip.head<3>() / clip.w();
+    return Vec3((ndc.x() + 1) / 2 * camera.width(), (1 - ndc.y()) / 2 * camera.height(), (ndc.z() + 1) / 2);
+  };
+  for (const double size : {1e-30, 1e-15, 1.0, 1e20, 1e30}) {
+    for (const double offset : {0.0, 1e6}) {
+      CAPTURE(size, offset);
+      Positions P(8, 3);
+      for (int i = 0; i < 8; ++i)
+        P.row(i) =
+            size * Vec3(offset + (i & 1 ? 1 : -1), offset + (i & 2 ? 1 : -1), offset + (i & 4 ? 0.2 : 0));
+      OrbitCamera camera;
+      camera.frame(P, Vec3::UnitZ(), Vec3(-0.6, -1.0, 0.8), 800, 600);
+      camera.orbit(30, 10);
+      std::vector<float> positions;
+      drawing_positions(camera, P, positions);
+      for (int v = 0; v < 8; ++v) {
+        const Vec3 expected = camera.project(P.row(v).transpose());
+        REQUIRE((expected.head<2>().array() > 0).all());  // in the view
+        const Vec3 got = drawn(camera, positions, v);
+        CHECK((got.head<2>() - expected.head<2>()).norm() < 1e-2);  // pixels
+        CHECK(std::abs(got.z() - expected.z()) < 1e-5);             // window depth
+      }
+    }
+  }
+}
+
 TEST_CASE("gizmo: arrows, centre and ring picked under the cursor, drags translate along the arrow or in the view plane, sweeps turn about the axis",
           "[view]") {
   const OrbitCamera camera = framed_camera();

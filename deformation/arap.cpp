@@ -79,6 +79,14 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
     }
   });
 
+  // The floor: min_weight_ratio times the mean weight with the negative ones counted as zero, a
+  // continuous function of the weights. The mean of the positive weights alone jumped where a weight
+  // crosses zero: a right angle's exact 0 (the survey's cylinder grid) left out, its rounding-level 1e-17
+  // counted, moved the floor and every clamped weight with it (a 1e-16 change of the input moved the
+  // result by 8e-4 of the diagonal).
+  const auto weight_floor = [&](double sum, long count) {
+    return options_.min_weight_ratio * (sum > 0 ? sum / count : 1.0);
+  };
   std::vector<Triplet> triplets;
   triplets.reserve(6 * nf);
   clamped_weights_ = 0;
@@ -96,8 +104,8 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
     long count = 0;
     for (int j = 0; j < W.outerSize(); ++j)
       for (SparseMatrix::InnerIterator it(W, j); it; ++it)
-        if (it.value() > 0) sum += it.value(), ++count;
-    const double floor = options_.min_weight_ratio * (count ? sum / count : 1.0);
+        if (it.row() != j) sum += std::max(it.value(), 0.0), ++count;
+    const double floor = weight_floor(sum, count);
     ring_offsets_.assign(nv_ + 1, 0);
     ring_.clear();
     ring_weight_.clear();
@@ -135,10 +143,8 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
   } else {
     // Spokes and rims: one weight per face corner (its opposite edge in that face), clamped per corner.
     double sum = 0;
-    long count = 0;
-    for (double c : half_cot)
-      if (c > 0) sum += c, ++count;
-    const double floor = options_.min_weight_ratio * (count ? sum / count : 1.0);
+    for (double c : half_cot) sum += std::max(c, 0.0);
+    const double floor = weight_floor(sum, static_cast<long>(half_cot.size()));
     face_vertex_.assign(F.data(), F.data() + 3 * nf);
     face_weight_.assign(3 * nf, 0.0);
     face_edge_.assign(9 * nf, 0.0);

@@ -101,6 +101,15 @@ void remesh_base(const Positions& S, const Region& region, double edge, Decompos
   double far = 0;
   for (const ClosestPoint& c : feet) far = std::max(far, std::sqrt(c.squared_distance));
   const double allowed = std::max(2 * report.check.max_height, 0.01 * bounding_box_diagonal(S));
+  const int nb = static_cast<int>(r.P.rows());
+  if (boundary_vertices(r.F, nb).size() == static_cast<size_t>(nb) &&
+      boundary_vertices(d.base_faces, static_cast<int>(S.rows())).size() < static_cast<size_t>(S.rows())) {
+    char text[300];  // measured: edge 1e9 on a 400-vertex grid left its 76 outline vertices, and 24 folds
+    std::snprintf(text, sizeof text, "decompose: the base remeshed to edge length %g keeps the outline alone (its %d "
+                  "vertices all on the boundary): the edges are too long for the shape; use a smaller --remesh-base",
+                  edge, nb);
+    throw InvalidInput(text);
+  }
   if (!(far <= allowed)) {
     char text[300];
     std::snprintf(text, sizeof text, "decompose: the base remeshed to edge length %g (%d vertices) lies up to %.3g "
@@ -155,6 +164,16 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
     throw InvalidInput("decompose: the region has " + std::to_string(region.num_vertices()) +
                        " vertex labels but the mesh has " + std::to_string(S.rows()) + " vertices");
   o.validate("decompose");
+  if (o.kind == DecompositionKind::Remeshed && o.remesh_edge_length > 0) {  // before the low-pass's work
+    const double diagonal = bounding_box_diagonal(S);
+    if (!(o.remesh_edge_length < diagonal)) {
+      char text[300];
+      std::snprintf(text, sizeof text, "decompose: the remeshing edge length %g is not shorter than the mesh's "
+                    "bounding-box diagonal %.3g: the base would keep the outline alone; use a smaller --remesh-base "
+                    "(0: the mean edge length)", o.remesh_edge_length, diagonal);
+      throw InvalidInput(text);
+    }
+  }
   Decomposition d;
   DecompositionReport& report = d.report;
   report.kind = o.kind;

@@ -174,6 +174,29 @@ TEST_CASE("multiscale: handles are met and bad options are reported", "[reconstr
                     Contains("multiscale-normal: the remeshing edge length must be finite"));
 }
 
+TEST_CASE("multiscale: a remeshing edge too long for the shape is refused, before the low-pass or after remeshing",
+          "[reconstruction][multiscale][remesh]") {
+  // A break test: --remesh-base 1e9 on a 400-vertex grid made a base of its outline alone (76 vertices,
+  // all on the boundary) and an edit with 24 folded triangles, exit 0.
+  SceneOptions so;
+  so.resolution = 400;
+  const Scene s = make_scene("lift", so);
+  const Mesh mesh = make_mesh(s.P, s.F);
+  const double diag = bounding_box_diagonal(s.P);
+  MultiscaleOptions o;
+  o.decomposition.kind = DecompositionKind::Remeshed;
+  o.decomposition.remesh_edge_length = 1e9;
+  CHECK_THROWS_WITH(MultiscaleDeformer(o).prepare(mesh, s.region),
+                    Contains("not shorter than the mesh's bounding-box diagonal") && Contains("--remesh-base"));
+  o.decomposition.remesh_edge_length = 0.9 * diag;
+  CHECK_THROWS_WITH(MultiscaleDeformer(o).prepare(mesh, s.region),
+                    Contains("keeps the outline alone") && Contains("--remesh-base"));
+  o.decomposition.remesh_edge_length = 0.1 * diag;  // coarse, still a surface with an inside
+  MultiscaleDeformer coarse(o);
+  coarse.prepare(mesh, s.region);
+  CHECK(coarse.deform(s.transforms).allFinite());
+}
+
 TEST_CASE("multiscale: a remeshed base (CGAL isotropic remeshing) for normal, volumes and transfer",
           "[reconstruction][multiscale][remesh]") {
   const Scene s = scene("bend120");

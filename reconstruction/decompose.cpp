@@ -105,9 +105,11 @@ void remesh_base(const Positions& S, const Region& region, double edge, Decompos
   if (boundary_vertices(r.F, nb).size() == static_cast<size_t>(nb) &&
       boundary_vertices(d.base_faces, static_cast<int>(S.rows())).size() < static_cast<size_t>(S.rows())) {
     char text[300];  // measured: edge 1e9 on a 400-vertex grid left its 76 outline vertices, and 24 folds
-    std::snprintf(text, sizeof text, "decompose: the base remeshed to edge length %g keeps the outline alone (its %d "
-                  "vertices all on the boundary): the edges are too long for the shape; use a smaller --remesh-base",
-                  edge, nb);
+    std::snprintf(
+        text, sizeof text,
+        "decompose: the base remeshed to edge length %g keeps the outline alone (its %d "
+        "vertices all on the boundary): the edges are too long for the shape; use a smaller --remesh-base",
+        edge, nb);
     throw InvalidInput(text);
   }
   if (!(far <= allowed)) {
@@ -168,9 +170,12 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
     const double diagonal = bounding_box_diagonal(S);
     if (!(o.remesh_edge_length < diagonal)) {
       char text[300];
-      std::snprintf(text, sizeof text, "decompose: the remeshing edge length %g is not shorter than the mesh's "
-                    "bounding-box diagonal %.3g: the base would keep the outline alone; use a smaller --remesh-base "
-                    "(0: the mean edge length)", o.remesh_edge_length, diagonal);
+      std::snprintf(
+          text, sizeof text,
+          "decompose: the remeshing edge length %g is not shorter than the mesh's "
+          "bounding-box diagonal %.3g: the base would keep the outline alone; use a smaller --remesh-base "
+          "(0: the mean edge length)",
+          o.remesh_edge_length, diagonal);
       throw InvalidInput(text);
     }
   }

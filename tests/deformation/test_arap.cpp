@@ -58,8 +58,9 @@ TEST_CASE("arap: a rounding-level change of the input changes the result at roun
   // A break test: scaling the survey cylinder's coordinates by 1 + 1e-16 noise moved the result by 7.8e-4
   // of the diagonal (and turning the edit in space by 7.5e-4): its grid's right angles have cotangent
   // weights of exactly 0 or ±1e-17, and the weight floor, a mean of the positive weights only, jumped.
-  const EditCase c = file_case(test::shared_data("survey/cylinder.off"), test::shared_data("survey/cylinder.sel"),
-                               test::shared_data("survey/cylinder.def"));
+  const EditCase c =
+      file_case(test::shared_data("survey/cylinder.off"), test::shared_data("survey/cylinder.sel"),
+                test::shared_data("survey/cylinder.def"));
   const double diag = bounding_box_diagonal(c.P);
   Positions noisy = c.P;
   std::mt19937 random(7);

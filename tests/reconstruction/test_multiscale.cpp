@@ -174,8 +174,9 @@ TEST_CASE("multiscale: handles are met and bad options are reported", "[reconstr
                     Contains("multiscale-normal: the remeshing edge length must be finite"));
 }
 
-TEST_CASE("multiscale: a remeshing edge too long for the shape is refused, before the low-pass or after remeshing",
-          "[reconstruction][multiscale][remesh]") {
+TEST_CASE(
+    "multiscale: a remeshing edge too long for the shape is refused, before the low-pass or after remeshing",
+    "[reconstruction][multiscale][remesh]") {
   // A break test: --remesh-base 1e9 on a 400-vertex grid made a base of its outline alone (76 vertices,
   // all on the boundary) and an edit with 24 folded triangles, exit 0.
   SceneOptions so;
@@ -186,8 +187,9 @@ TEST_CASE("multiscale: a remeshing edge too long for the shape is refused, befor
   MultiscaleOptions o;
   o.decomposition.kind = DecompositionKind::Remeshed;
   o.decomposition.remesh_edge_length = 1e9;
-  CHECK_THROWS_WITH(MultiscaleDeformer(o).prepare(mesh, s.region),
-                    Contains("not shorter than the mesh's bounding-box diagonal") && Contains("--remesh-base"));
+  CHECK_THROWS_WITH(
+      MultiscaleDeformer(o).prepare(mesh, s.region),
+      Contains("not shorter than the mesh's bounding-box diagonal") && Contains("--remesh-base"));
   o.decomposition.remesh_edge_length = 0.9 * diag;
   CHECK_THROWS_WITH(MultiscaleDeformer(o).prepare(mesh, s.region),
                     Contains("keeps the outline alone") && Contains("--remesh-base"));

@@ -34,8 +34,8 @@ void OrbitCamera::frame(const Positions& P, const Vec3& up, const Vec3& view_dir
   target_ = origin_ = 0.5 * (lo + hi);
   unit_ = 0.5 * (hi - lo).maxCoeff();
   if (!(unit_ > 0) || !std::isfinite(unit_)) unit_ = 1;
-  // In frame units first: the squares of coordinates below 1e-154 underflowed (the view then framed a
-  // radius of 1e-12 around a far smaller shape).
+  // In frame units, without a floor: the radius was clamped at 1e-12 (a smaller shape was framed far too
+  // wide), and the squares of coordinates below 1e-154 underflowed.
   radius_ =
       unit_ * std::sqrt(((P.rowwise() - origin_.transpose()) / unit_).rowwise().squaredNorm().maxCoeff());
   if (!(radius_ > 0)) radius_ = unit_;

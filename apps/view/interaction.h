@@ -41,8 +41,8 @@ class OrbitCamera {
   // The drawing frame set by frame(): positions go to OpenGL as (p − frame_origin()) / frame_unit() in
   // single precision, and these matrices take such positions to clip space (the view to eye space in
   // frame units, the projection divided by the unit: homogeneous, so the same pixels and depths). Floats
-  // then keep their digits at any size and place (raw coordinates lost them 1e6 sizes from the origin and
-  // under- or overflowed in the products below 1e-19 or beyond 1e19).
+  // then keep their digits at any size and place (raw coordinates lost them 1e6 sizes from the origin, and
+  // at sizes of 1e-15 or 1e20 the drawn vertices missed their pixels: tests/view).
   const Vec3& frame_origin() const { return origin_; }
   double frame_unit() const { return unit_; }
   Mat4 frame_view_matrix() const;

@@ -79,13 +79,17 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
     }
   });
 
-  // The floor: min_weight_ratio times the mean weight with the negative ones counted as zero, a
-  // continuous function of the weights. The mean of the positive weights alone jumped where a weight
-  // crosses zero: a right angle's exact 0 (the survey's cylinder grid) left out, its rounding-level 1e-17
-  // counted, moved the floor and every clamped weight with it (a 1e-16 change of the input moved the
-  // result by 8e-4 of the diagonal).
-  const auto weight_floor = [&](double sum, long count) {
-    return options_.min_weight_ratio * (sum > 0 ? sum / count : 1.0);
+  // The floor: min_weight_ratio times the median weight magnitude, a continuous function of the weights
+  // that a few outliers do not move. The mean of the positive weights jumped where a weight crosses zero
+  // (a right angle's exact 0 on the survey cylinder's grid left out, its ±1e-17 counted: a 1e-16 change of
+  // the input moved the result by 8e-4 of the diagonal), and any mean followed a needle's cotangent of
+  // 1e5 (one edge of the survey cactus split at 1.3e-5 of its length lifted 75 % of the weights to the
+  // floor and moved the result by 7e-3 of the diagonal, far from the needle).
+  const auto weight_floor = [&](std::vector<double>& magnitudes) {
+    if (magnitudes.empty()) return options_.min_weight_ratio;
+    const auto middle = magnitudes.begin() + static_cast<long>(magnitudes.size() / 2);
+    std::nth_element(magnitudes.begin(), middle, magnitudes.end());
+    return options_.min_weight_ratio * (*middle > 0 ? *middle : 1.0);
   };
   std::vector<Triplet> triplets;
   triplets.reserve(6 * nf);
@@ -100,12 +104,12 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
       }
     SparseMatrix W(nv_, nv_);
     W.setFromTriplets(triplets.begin(), triplets.end());
-    double sum = 0;
-    long count = 0;
+    std::vector<double> magnitudes;
+    magnitudes.reserve(W.nonZeros());
     for (int j = 0; j < W.outerSize(); ++j)
       for (SparseMatrix::InnerIterator it(W, j); it; ++it)
-        if (it.row() != j) sum += std::max(it.value(), 0.0), ++count;
-    const double floor = weight_floor(sum, count);
+        if (it.row() != j) magnitudes.push_back(std::abs(it.value()));
+    const double floor = weight_floor(magnitudes);
     ring_offsets_.assign(nv_ + 1, 0);
     ring_.clear();
     ring_weight_.clear();
@@ -142,9 +146,10 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
     }
   } else {
     // Spokes and rims: one weight per face corner (its opposite edge in that face), clamped per corner.
-    double sum = 0;
-    for (double c : half_cot) sum += std::max(c, 0.0);
-    const double floor = weight_floor(sum, static_cast<long>(half_cot.size()));
+    std::vector<double> magnitudes(half_cot.size());
+    std::transform(half_cot.begin(), half_cot.end(), magnitudes.begin(),
+                   [](double c) { return std::abs(c); });
+    const double floor = weight_floor(magnitudes);
     face_vertex_.assign(F.data(), F.data() + 3 * nf);
     face_weight_.assign(3 * nf, 0.0);
     face_edge_.assign(9 * nf, 0.0);

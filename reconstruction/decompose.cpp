@@ -170,12 +170,11 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
     const double diagonal = bounding_box_diagonal(S);
     if (!(o.remesh_edge_length < diagonal)) {
       char text[300];
-      std::snprintf(
-          text, sizeof text,
-          "decompose: the remeshing edge length %g is not shorter than the mesh's "
-          "bounding-box diagonal %.3g: the base would keep the outline alone; use a smaller --remesh-base "
-          "(0: the mean edge length)",
-          o.remesh_edge_length, diagonal);
+      std::snprintf(text, sizeof text,
+                    "decompose: the remeshing edge length %.6g is not shorter than the mesh's "
+                    "bounding-box diagonal %.6g: the base would lose the shape; use a smaller --remesh-base "
+                    "(0: the mean edge length)",
+                    o.remesh_edge_length, diagonal);
       throw InvalidInput(text);
     }
   }

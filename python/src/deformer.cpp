@@ -279,9 +279,10 @@ const std::vector<Option>& options_table() {
                            [](auto& s, const std::string&) -> auto& { return s.arap.anderson; }));
     t.push_back(choice_option("energy", {"arap"}, "the rigid cells", kEnergies,
                               [](auto& s, const std::string&) -> auto& { return s.arap.energy; }));
-    t.push_back(real_option("min_weight_ratio", {"arap"},
-                            "cotangent weights are clamped below at this fraction of the mean weight, in (0, 1]",
-                            [](auto& s, const std::string&) -> auto& { return s.arap.min_weight_ratio; }));
+    t.push_back(real_option(
+        "min_weight_ratio", {"arap"},
+        "cotangent weights are clamped below at this fraction of the median weight magnitude, in (0, 1]",
+        [](auto& s, const std::string&) -> auto& { return s.arap.min_weight_ratio; }));
     t.push_back(real_option("thickness", {"primo"}, "prism height relative to the mean edge length (> 0)",
                             [](auto& s, const std::string&) -> auto& { return s.primo.thickness; }));
     // lattice, cage (9.5)

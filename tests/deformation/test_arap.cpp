@@ -75,6 +75,44 @@ TEST_CASE("arap: a rounding-level change of the input changes the result at roun
   CHECK(test::max_row_distance(a.deform(c.transforms), b.deform(c.transforms)) <= 1e-7 * diag);
 }
 
+TEST_CASE("arap: one needle triangle does not move the result far from it", "[arap]") {
+  // A break test: one free edge of the survey cactus split at 1.3e-5 of its length (the same surface and
+  // a vertex more) moved the result by 7.4e-3 of the diagonal, half a diagonal away too: its cotangent of
+  // 9e4 lifted the mean weight that sets the floor, and with it 75 % of the weights (split at the middle:
+  // 3.6e-4).
+  const EditCase c = file_case(test::shared_data("survey/cactus.off"), test::shared_data("survey/cactus.sel"),
+                               test::shared_data("survey/cactus.def"));
+  const double diag = bounding_box_diagonal(c.P);
+  int f = 0;  // a face with free corners, and its neighbour across the edge (a, b)
+  while (c.region.code(c.F(f, 0)) != Region::kFree || c.region.code(c.F(f, 1)) != Region::kFree ||
+         c.region.code(c.F(f, 2)) != Region::kFree)
+    ++f;
+  const int a = c.F(f, 0), b = c.F(f, 1), apex = c.F(f, 2);
+  int g = 0, other = -1;
+  for (; g < c.F.rows() && other < 0; ++g)
+    for (int k = 0; k < 3; ++k)
+      if (c.F(g, k) == b && c.F(g, (k + 1) % 3) == a) other = c.F(g, (k + 2) % 3);
+  --g;
+  REQUIRE(other >= 0);
+  const int m = static_cast<int>(c.P.rows());
+  Positions P(m + 1, 3);
+  P << c.P, (c.P.row(a) + 1.3e-5 * (c.P.row(b) - c.P.row(a)));
+  Faces F(c.F.rows() + 2, 3);
+  F << c.F, Eigen::RowVector3i(m, b, apex), Eigen::RowVector3i(a, m, other);
+  F.row(f) << a, m, apex;
+  F.row(g) << m, b, other;
+  std::vector<int> codes(m + 1, Region::kFree);
+  for (int v = 0; v < m; ++v) codes[v] = c.region.code(v);
+  ArapOptions o;
+  o.tolerance = 0;
+  o.max_iterations = 300;
+  ArapDeformer whole(o), split(o);
+  whole.prepare(c.P, c.F, c.region);
+  split.prepare(P, F, Region::from_codes(codes));
+  const Positions x = whole.deform(c.transforms), y = split.deform(c.transforms);
+  CHECK(test::max_row_distance(x, y.topRows(m)) <= 2e-3 * diag);
+}
+
 TEST_CASE("arap: a rigid motion of all constrained vertices moves the whole shape rigidly", "[arap]") {
   const Scene s = scene("bend120");
   std::vector<int> codes = s.region.codes();

@@ -34,6 +34,13 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
+// The rows of X (#V×3) one after the other in single precision, as OpenGL's vertex buffers take them.
+void rows_as_floats(const Positions& X, std::vector<float>& out) {
+  out.resize(static_cast<size_t>(X.size()));
+  for (Eigen::Index v = 0; v < X.rows(); ++v)
+    for (int k = 0; k < 3; ++k) out[3 * v + k] = static_cast<float>(X(v, k));
+}
+
 constexpr int kPanelWidth = 380;
 constexpr double kIdleBudgetMs = 150;  // how long a nonlinear method iterates per drawn frame while idle
 
@@ -128,6 +135,7 @@ class Viewer {
   void draw_panel();
   void upload_positions();
   void upload_colors();
+  void upload_buffer(int buffer);  // upload_ into buffers_[buffer]
   DepthImage read_depth();
   void write_screenshot(const std::string& path);
   // Before writing a file: the extension of its kind (".png", ".sel", ".def", or "mesh"), writable, not
@@ -504,26 +512,21 @@ void Viewer::recolor() {
       colors = plain();
     }
   }
-  upload_.resize(colors.size());
-  for (Eigen::Index v = 0; v < colors.rows(); ++v)
-    for (int k = 0; k < 3; ++k) upload_[3 * v + k] = static_cast<float>(colors(v, k));
-  glBindBuffer(GL_ARRAY_BUFFER, buffers_[2]);
-  glBufferSubData(GL_ARRAY_BUFFER, 0, upload_.size() * sizeof(float), upload_.data());
+  rows_as_floats(colors, upload_);
+  upload_buffer(2);
 }
 
 void Viewer::upload_positions() {
   normals_.compute(X_, N_);
-  for (int b = 0; b < 2; ++b) {
-    if (b == 0) {
-      drawing_positions(camera_, X_, upload_);
-    } else {
-      upload_.resize(N_.size());
-      for (Eigen::Index v = 0; v < N_.rows(); ++v)
-        for (int k = 0; k < 3; ++k) upload_[3 * v + k] = static_cast<float>(N_(v, k));
-    }
-    glBindBuffer(GL_ARRAY_BUFFER, buffers_[b]);
-    glBufferSubData(GL_ARRAY_BUFFER, 0, upload_.size() * sizeof(float), upload_.data());
-  }
+  drawing_positions(camera_, X_, upload_);
+  upload_buffer(0);
+  rows_as_floats(N_, upload_);
+  upload_buffer(1);
+}
+
+void Viewer::upload_buffer(int buffer) {
+  glBindBuffer(GL_ARRAY_BUFFER, buffers_[buffer]);
+  glBufferSubData(GL_ARRAY_BUFFER, 0, upload_.size() * sizeof(float), upload_.data());
 }
 
 Vec3 Viewer::handle_center(int k) const {

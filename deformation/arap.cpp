@@ -63,8 +63,14 @@ DeformerTraits ArapDeformer::traits() const {
   return t;
 }
 
-void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& region) {
-  rest_ = P;
+void ArapDeformer::do_prepare(const Positions& world, const Faces& F, const Region& region) {
+  rest_ = world;
+  // The iteration works in the shape's centred, normalised frame: the global step solves for positions, so
+  // its rounding grew with their distance from the origin (the survey cactus moved 1e8 of its size away
+  // changed by 2e-4 of the diagonal), and the rotation fit's determinant test, cubic in the squared size,
+  // overflowed beyond sizes of ~1e50 (each fit fell back to the SVD, 6× slower, and the result moved).
+  local_ = LocalFrame::of(world);
+  const Positions P = local_.to_local(world);
   nv_ = static_cast<int>(P.rows());
   const long nf = F.rows();
   const bool spokes = options_.energy == ArapEnergy::Spokes;
@@ -210,7 +216,7 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
   unknown_ = system_.unknown();
 
   // Iteration state and buffers, sized once.
-  x_ = rest_;
+  x_ = P;
   rotation_.assign(nv_, Mat3::Identity());
   quaternion_.assign(nv_, Eigen::Vector4d(0, 0, 0, 1));
   vertex_energy_.assign(nv_, 0.0);
@@ -218,6 +224,7 @@ void ArapDeformer::do_prepare(const Positions& P, const Faces& F, const Region& 
   rhs_.resize(unknown_.size(), 3);
   x_unknown_.resize(unknown_.size(), 3);
   targets_.resize(constrained_.size(), 3);
+  local_targets_.resize(constrained_.size(), 3);
   energies_.clear();
   energies_.reserve(std::min(options_.max_iterations, 100000) + 1);  // beyond that a frame may allocate
   const long n = 3 * static_cast<long>(unknown_.size());
@@ -409,13 +416,15 @@ void ArapDeformer::cold_start(const Positions& targets) {
     int count = 0;
     for (size_t c = 0; c < constrained_.size(); ++c)
       if (handle_of_constrained_[c] == k)
-        rest_mean += rest_.row(constrained_[c]).transpose(), target_mean += targets.row(c).transpose(), ++count;
+        rest_mean += local_.to_local(Vec3(rest_.row(constrained_[c]))),
+            target_mean += targets.row(c).transpose(), ++count;
     if (count < 2) continue;
     rest_mean /= count, target_mean /= count;
     Mat3 C = Mat3::Zero();
     for (size_t c = 0; c < constrained_.size(); ++c)
       if (handle_of_constrained_[c] == k)
-        C.noalias() += (rest_.row(constrained_[c]).transpose() - rest_mean) * (targets.row(c).transpose() - target_mean).transpose();
+        C.noalias() += (local_.to_local(Vec3(rest_.row(constrained_[c]))) - rest_mean) *
+                       (targets.row(c).transpose() - target_mean).transpose();
     Eigen::Quaterniond q(best_rotation(C));
     if (q.w() < 0) q.coeffs() = -q.coeffs();
     handle_quaternion_[k] = q.coeffs();
@@ -477,8 +486,10 @@ double ArapDeformer::anderson_step(double energy) {
   return local_step();
 }
 
-void ArapDeformer::run(const Positions& targets, Positions& out) {
+void ArapDeformer::run(const Positions& world_targets, Positions& out) {
   local_seconds_ = global_seconds_ = 0;
+  local_targets_ = (world_targets.rowwise() - local_.centre.transpose()) / local_.scale;
+  const Positions& targets = local_targets_;
   for (size_t c = 0; c < constrained_.size(); ++c) x_.row(constrained_[c]) = targets.row(c);
   // The constrained part of the global step's right-hand side, fixed for the frame: −Q_uk x_k.
   if (!unknown_.empty()) {
@@ -508,7 +519,8 @@ void ArapDeformer::run(const Positions& targets, Positions& out) {
   }
   cold_ = guess_ = false;
   energies_.clear();
-  energies_.push_back(energy);
+  const double energy_unit = local_.scale * local_.scale;  // energy_history() is in the caller's units
+  energies_.push_back(energy * energy_unit);
   history_ = next_column_ = 0;
   has_previous_ = false;
   const double tol = options_.tolerance * diagonal_;
@@ -534,7 +546,7 @@ void ArapDeformer::run(const Positions& targets, Positions& out) {
     } else {
       energy = anderson_step(energy);
     }
-    energies_.push_back(energy);
+    energies_.push_back(energy * energy_unit);
     if (progress_wanted()) {
       char line[128];
       std::snprintf(line, sizeof line, "arap: iteration %d, largest move %.3g of the diagonal", iterations,
@@ -546,7 +558,9 @@ void ArapDeformer::run(const Positions& targets, Positions& out) {
   frame_report_.iterations = iterations;
   frame_report_.residual = step / diagonal_;
   frame_report_.converged = converged;
-  out = x_;
+  out = (x_ * local_.scale).rowwise() + local_.centre.transpose();
+  // The constrained vertices exactly where asked (the round trip through the local frame rounds).
+  for (size_t c = 0; c < constrained_.size(); ++c) out.row(constrained_[c]) = world_targets.row(c);
 }
 
 void ArapDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out) {
@@ -557,13 +571,13 @@ void ArapDeformer::do_deform(const std::vector<Mat4>& transforms, Positions& out
 void ArapDeformer::do_deform_to(const Positions& targets, Positions& out) { run(targets, out); }
 
 void ArapDeformer::do_set_initial_guess(const Positions& X) {
-  x_ = X;
+  x_ = local_.to_local(X);
   cold_ = false;
   guess_ = true;
 }
 
 void ArapDeformer::do_reset() {
-  x_ = rest_;
+  x_ = local_.to_local(rest_);
   std::fill(rotation_.begin(), rotation_.end(), Mat3::Identity());
   std::fill(quaternion_.begin(), quaternion_.end(), Eigen::Vector4d(0, 0, 0, 1));
   energies_.clear();

@@ -7,6 +7,7 @@
 
 #include <vector>
 
+#include "msdeform/core/local_frame.h"
 #include "msdeform/core/solver.h"
 #include "msdeform/deformation/deformer.h"
 
@@ -114,7 +115,9 @@ class ArapDeformer : public Deformer {
   std::string name_ = "arap";
   ArapOptions options_;
   int nv_ = 0;
-  Positions rest_, targets_;
+  Positions rest_, targets_;  // the caller's frame
+  LocalFrame local_;          // x_, local_targets_ and every prepared vector are in this frame
+  Positions local_targets_;
   std::vector<int> constrained_, handle_of_constrained_, unknown_;
   ConstrainedQuadratic system_;
 

@@ -771,21 +771,31 @@ Positions CageDeformer::control_points() const {
 void CageDeformer::fit_basis(const Positions& P, const Region&) {
   const bool user_cage = options_.cage_P.rows() > 0;
   harmonic_.reset();
+  // The cage and its coordinates are built relative to a centre (the coordinates are translation-invariant):
+  // a shape far from the origin keeps its digits (at an offset of 1e8 sizes the automatic cage and the
+  // harmonic coordinates lost 20 times the input's rounding).
+  Positions centred_cage;
   if (user_cage) {
     const std::string who = name_ + ": the user cage";
     cage_F_ = check_cage(options_.cage_P, options_.cage_F, who.c_str());
     cage_P_ = options_.cage_P;
+    cage_origin_ = bounding_box_centre(cage_P_);
+    centred_cage = cage_P_.rowwise() - cage_origin_.transpose();
   } else {
-    offset_kdop_cage(P, options_.margin, options_.subdivisions, cage_P_, cage_F_);
+    cage_origin_ = bounding_box_centre(P);
+    offset_kdop_cage(P.rowwise() - cage_origin_.transpose(), options_.margin, options_.subdivisions,
+                     centred_cage, cage_F_);
+    cage_P_ = centred_cage.rowwise() + cage_origin_.transpose();
   }
-  mvc_ = MeanValueCage(cage_P_, cage_F_);
+  mvc_ = MeanValueCage(centred_cage, cage_F_);
   if (user_cage) {
     std::atomic<long> outside{0};
     parallel_for_chunks(
         P.rows(),
         [&](long begin, long end) {
           long count = 0;
-          for (long i = begin; i < end; ++i) count += mvc_.winding_number(P.row(i)) < 0.5;
+          for (long i = begin; i < end; ++i)
+            count += mvc_.winding_number(P.row(i).transpose() - cage_origin_) < 0.5;
           outside += count;
         },
         256);
@@ -796,7 +806,7 @@ void CageDeformer::fit_basis(const Positions& P, const Region&) {
           "cage to enclose them)");
   }
   if (options_.coordinates == CageCoordinates::Harmonic)
-    harmonic_ = std::make_unique<HarmonicCoordinates>(cage_P_, cage_F_, options_.harmonic_resolution);
+    harmonic_ = std::make_unique<HarmonicCoordinates>(centred_cage, cage_F_, options_.harmonic_resolution);
 }
 
 std::string CageDeformer::overshoot_advice() const {
@@ -809,11 +819,12 @@ void CageDeformer::basis(const Vec3& x, BasisRow& row) const {
   row.index.resize(m);
   row.value.resize(m);
   std::iota(row.index.begin(), row.index.end(), 0);
+  const Vec3 centred = x - cage_origin_;
   if (harmonic_) {
-    harmonic_->coordinates(x, row.value.data());
+    harmonic_->coordinates(centred, row.value.data());
   } else {
     thread_local MeanValueWorkspace ws;
-    mvc_.coordinates(x, ws, row.value.data());
+    mvc_.coordinates(centred, ws, row.value.data());
   }
 }
 

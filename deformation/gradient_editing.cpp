@@ -14,6 +14,7 @@ DeformerTraits GradientEditing::traits() const {
 
 void GradientEditing::do_prepare(const Positions& P, const Faces& F, const Region& region) {
   rest_ = P;
+  origin_ = bounding_box_centre(P);
   faces_ = F;
   const int nv = static_cast<int>(P.rows()), nf = static_cast<int>(F.rows()), nh = region.num_handles();
   const LaplaceOperator lap = cotan_laplacian(P, F);
@@ -91,20 +92,23 @@ void GradientEditing::do_deform(const std::vector<Mat4>& transforms, Positions& 
       rhs.row(u) = sum.transpose();
     }
   });
-  // Known rows: p on fixed vertices, T_k p on handle vertices.
+  // Known rows: p on fixed vertices, T_k p on handle vertices, relative to the rest shape's centre (the
+  // Poisson matrix annihilates constants, so the solution moves with them; absolute positions far from the
+  // origin lost digits in the solve: 25 times the input's rounding at an offset of 1e8 sizes).
   Eigen::MatrixXd& known = frame_.known();
   const std::vector<int>& kv = system_.known();
   for (size_t c = 0; c < kv.size(); ++c) {
     const int k = handle_of_known_[c];
     const Vec3 p = rest_.row(kv[c]);
-    known.row(c) = (k < 0 ? p : transform_point(transforms[k], p)).transpose();
-    out.row(kv[c]) = known.row(c);
+    const Vec3 target = k < 0 ? p : transform_point(transforms[k], p);
+    out.row(kv[c]) = target.transpose();
+    known.row(c) = (target - origin_).transpose();
   }
   frame_.solve();
   const Eigen::MatrixXd& x = frame_.solution();
   const std::vector<int>& uv = system_.unknown();
   parallel_for_chunks(static_cast<long>(uv.size()), [&](long b, long e) {
-    for (long u = b; u < e; ++u) out.row(uv[u]) = x.row(u);
+    for (long u = b; u < e; ++u) out.row(uv[u]) = x.row(u) + origin_.transpose();
   });
 }
 

@@ -55,6 +55,7 @@ class GradientEditing : public Deformer {
  private:
   std::string name_ = "gradient";
   Positions rest_;
+  Vec3 origin_ = Vec3::Zero();  // the rest shape's bounding-box centre; the solve works relative to it
   Faces faces_;
   ConstrainedQuadratic system_;
   KnownRowSolve frame_;

@@ -982,22 +982,30 @@ TriangleSoup triangulate(const FileContents& soup, const std::string& path, cons
       }
   std::sort(sides.begin(), sides.end());
   std::vector<std::array<int, 2>> shared;
-  std::vector<int> sorted;
+  std::vector<int> polygon, sorted;
   for (int f = 0; f < npoly; ++f) {
-    const int* corner = soup.corners.data() + soup.offsets[f];
-    const int n = soup.offsets[f + 1] - soup.offsets[f];
-    for (int k = 0; k < n; ++k)
-      if (corner[k] < 0 || corner[k] >= nv)
+    const int* listed = soup.corners.data() + soup.offsets[f];
+    const int listed_n = soup.offsets[f + 1] - soup.offsets[f];
+    for (int k = 0; k < listed_n; ++k)
+      if (listed[k] < 0 || listed[k] >= nv)
         throw InvalidInput(who + ": " + path +
                            (soup.lines[f] > 0 ? " line " + std::to_string(soup.lines[f]) : "") + ": face " +
-                           std::to_string(f) + " has vertex index " + std::to_string(corner[k]) +
+                           std::to_string(f) + " has vertex index " + std::to_string(listed[k]) +
                            " out of range [0, " + std::to_string(nv) + ")");
-    sorted.assign(corner, corner + n);
+    // A corner listed twice in a row (`4 a b c c`, or first and last) is a side of no length: left out, the
+    // polygon keeps its shape (dropping the whole face left a hole).
+    polygon.clear();
+    for (int k = 0; k < listed_n; ++k)
+      if (listed[k] != listed[(k + 1) % listed_n]) polygon.push_back(listed[k]);
+    const int* corner = polygon.data();
+    const int n = static_cast<int>(polygon.size());
+    sorted = polygon;
     std::sort(sorted.begin(), sorted.end());
-    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
+    if (n < 3 || std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
       ++report.degenerate_faces_skipped;
       continue;
     }
+    report.repeated_corners_merged += n < listed_n;
     if (n == 3) {
       triangles.push_back({corner[0], corner[1], corner[2]});
       continue;
@@ -1109,6 +1117,8 @@ std::string faces_changed_on_load(const LoadReport& r) {
   };
   add(r.duplicate_faces_dropped, "duplicate face", "duplicate faces", "dropped");
   add(r.degenerate_faces_skipped, "face repeating a vertex", "faces repeating a vertex", "dropped");
+  add(r.repeated_corners_merged, "face listing a corner twice in a row",
+      "faces listing a corner twice in a row", "read without the repetition");
   add(r.polygons_triangulated, "polygon", "polygons", "triangulated");
   add(r.faces_flipped, "face", "faces", "turned over to agree with their neighbours");
   return text;

@@ -323,6 +323,7 @@ py::dict load_report(const msd::LoadReport& r) {
   d["polygons_triangulated"] = r.polygons_triangulated;
   d["polygons_split_otherwise"] = r.polygons_split_otherwise;
   d["degenerate_faces_skipped"] = r.degenerate_faces_skipped;
+  d["repeated_corners_merged"] = r.repeated_corners_merged;
   d["duplicate_faces_dropped"] = r.duplicate_faces_dropped;
   d["faces_flipped"] = r.faces_flipped;
   d["first_ignored_line"] = r.first_ignored_line;

@@ -189,6 +189,25 @@ TEST_CASE("polygons are triangulated, duplicate and repeated-index faces dropped
   CHECK(mesh_report.duplicate_faces_dropped == 2);
 }
 
+TEST_CASE("a corner listed twice in a row is read once; other repeats drop the face", "[core][io]") {
+  // Break test: `4 0 1 2 2` (a triangle written as a quad with its last corner repeated, as some exporters
+  // do) was dropped as repeating a vertex, leaving a hole in the surface.
+  test::TempDir tmp;
+  std::ofstream(tmp.file("rep.off")) << "OFF\n5 5 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 2 0\n"
+                                        "4 0 1 2 2\n4 0 2 3 0\n5 1 4 4 4 2\n4 0 1 0 3\n4 1 1 1 1\n";
+  LoadReport report;
+  const TriangleSoup soup = load_soup(tmp.file("rep.off"), &report);
+  REQUIRE(soup.F.rows() == 3);
+  CHECK(soup.F.row(0) == Eigen::RowVector3i(0, 1, 2));  // the first corner kept, orientation kept
+  CHECK(soup.F.row(1) == Eigen::RowVector3i(0, 2, 3));  // first and last corner the same
+  CHECK(soup.F.row(2) == Eigen::RowVector3i(1, 4, 2));  // a run of three
+  CHECK(report.repeated_corners_merged == 3);
+  CHECK(report.degenerate_faces_skipped == 2);  // 0 1 0 3 (not in a row) and 1 1 1 1
+  CHECK_THAT(faces_changed_on_load(report),
+             Contains("3 faces listing a corner twice in a row read without the repetition") &&
+                 Contains("2 faces repeating a vertex dropped"));
+}
+
 TEST_CASE("a concave polygon is split into triangles that cover it once, a convex one into its fan",
           "[core][io]") {
   // Break test: the pentagon below (its reflex corner is the 4th) became a fan from its first corner with

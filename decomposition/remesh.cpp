@@ -20,6 +20,7 @@ namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using SurfaceMesh = CGAL::Surface_mesh<Kernel::Point_3>;
 namespace PMP = CGAL::Polygon_mesh_processing;
+constexpr double kCornerTurn = 0.5235987755982988;  // 30°: a turn of the outline that remeshing keeps
 }  // namespace
 
 RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_edge_length, int iterations) {
@@ -66,20 +67,29 @@ RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_
   }
 
   try {
-    // Border edges: split the long ones at collinear points (so that protecting them is allowed: CGAL
-    // requires protected edges of at most 4/3 the target), then constrain and protect them all.
-    std::vector<SurfaceMesh::Edge_index> border;
-    for (SurfaceMesh::Halfedge_index h : mesh.halfedges())
-      if (mesh.is_border(h)) border.push_back(mesh.edge(h));
-    PMP::split_long_edges(border, target_edge_length, mesh);
+    // The border: its edges are constrained (never flipped, their vertices not moved by smoothing) but split
+    // and collapsed towards the target like the others, so the outline is resampled from its own vertices
+    // (kept at the input's spacing, the survey plane's 800 outline vertices beside edges 20 times longer
+    // left 211 zero-area triangles in a base the shell could not solve on). Its corners, where the outline
+    // turns by more than kCornerTurn, are constrained vertices and stay.
     auto constrained = mesh.add_property_map<SurfaceMesh::Edge_index, bool>("e:msd_constrained", false).first;
-    for (SurfaceMesh::Edge_index e : mesh.edges())
-      if (mesh.is_border(e)) constrained[e] = true;
+    auto corner = mesh.add_property_map<SurfaceMesh::Vertex_index, bool>("v:msd_corner", false).first;
+    for (SurfaceMesh::Halfedge_index h : mesh.halfedges()) {
+      if (!mesh.is_border(h)) continue;
+      constrained[mesh.edge(h)] = true;
+      // h runs along the hole; the turn at its target is between h and the next border halfedge.
+      const SurfaceMesh::Halfedge_index next = mesh.next(h);
+      const Kernel::Vector_3 in = mesh.point(mesh.target(h)) - mesh.point(mesh.source(h));
+      const Kernel::Vector_3 out = mesh.point(mesh.target(next)) - mesh.point(mesh.source(next));
+      const double lengths = std::sqrt(in.squared_length() * out.squared_length());
+      if (!(in * out > std::cos(kCornerTurn) * lengths)) corner[mesh.target(h)] = true;
+    }
     PMP::isotropic_remeshing(mesh.faces(), target_edge_length, mesh,
                              CGAL::parameters::number_of_iterations(static_cast<unsigned>(iterations))
                                  .edge_is_constrained_map(constrained)
-                                 .protect_constraints(true));
+                                 .vertex_is_constrained_map(corner));
     mesh.remove_property_map(constrained);
+    mesh.remove_property_map(corner);
   } catch (const CGAL::Failure_exception& e) {
     throw SolverError(who + ": CGAL failed: " + e.what());
   }

@@ -178,7 +178,8 @@ TEST_CASE(
     "multiscale: a remeshing edge too long for the shape is refused, before the low-pass or after remeshing",
     "[reconstruction][multiscale][remesh]") {
   // A break test: --remesh-base 1e9 on a 400-vertex grid made a base of its outline alone (76 vertices,
-  // all on the boundary) and an edit with 24 folded triangles, exit 0.
+  // all on the boundary) and an edit with 24 folded triangles, exit 0. With the outline resampled, an edge
+  // of 0.9 of the diagonal leaves 5 base vertices, all under the fixed part or the handle.
   SceneOptions so;
   so.resolution = 400;
   const Scene s = make_scene("lift", so);
@@ -190,13 +191,41 @@ TEST_CASE(
   CHECK_THROWS_WITH(
       MultiscaleDeformer(o).prepare(mesh, s.region),
       Contains("not shorter than the mesh's bounding-box diagonal") && Contains("--remesh-base"));
-  o.decomposition.remesh_edge_length = 0.9 * diag;
+  o.decomposition.remesh_edge_length = 0.9 * diag;  // the outline resampled too: 5 base vertices, none free
   CHECK_THROWS_WITH(MultiscaleDeformer(o).prepare(mesh, s.region),
-                    Contains("keeps the outline alone") && Contains("--remesh-base"));
+                    Contains("has no free vertex") && Contains("--remesh-base"));
   o.decomposition.remesh_edge_length = 0.1 * diag;  // coarse, still a surface with an inside
   MultiscaleDeformer coarse(o);
   coarse.prepare(mesh, s.region);
   CHECK(coarse.deform(s.transforms).allFinite());
+}
+
+TEST_CASE("multiscale: a remeshed base much coarser than S resamples the outline too",
+          "[reconstruction][multiscale][remesh]") {
+  // A break test: on the survey plane (edges 0.5) every --remesh-base from 5 to 70 kept the 800 outline
+  // vertices at the input's spacing beside interior edges 10-140 times longer; the slivers along the outline
+  // (211 zero-area triangles of 1056 at 10) made the shell on B singular. The same here: a 40k-vertex plane
+  // with base edges 10 and 20 times its own.
+  SceneOptions so;
+  so.resolution = 40000;
+  const Scene s = make_scene("lift", so);
+  const Mesh mesh = make_mesh(s.P, s.F);
+  const double edge = mean_edge_length(s.P, s.F);
+  for (const double ratio : {10.0, 20.0}) {
+    INFO("remeshing edge " << ratio << " times S's mean edge");
+    MultiscaleOptions o;
+    o.decomposition.kind = DecompositionKind::Remeshed;
+    o.decomposition.remesh_edge_length = ratio * edge;
+    MultiscaleDeformer ms(o);
+    ms.prepare(mesh, s.region);
+    // Every base triangle has an area of at least a tenth of the target's equilateral one.
+    const double target_area = 0.4330127018922193 * ratio * ratio * edge * edge;
+    CHECK(face_areas(ms.base(), ms.base_faces()).minCoeff() >= 0.1 * target_area);
+    const Positions out = ms.deform(s.transforms);
+    CHECK(out.allFinite());
+    CHECK(test::constraint_error(s.P, out, s.region, s.transforms) <= 1e-12);
+    CHECK(ms.frame_report().folded_faces == 0);
+  }
 }
 
 TEST_CASE("multiscale: a remeshed base (CGAL isotropic remeshing) for normal, volumes and transfer",

@@ -637,10 +637,16 @@ Vec3 ViewAxes::direction(double azimuth_degrees, double elevation_degrees) const
 }
 
 namespace {
-// The coordinate axis (positive) nearest to direction d.
+// Components or extents within this fraction of each other are a tie, broken by the axes' order: the
+// choice must not follow rounding (a square moved along x turned its picture by 90°).
+constexpr double kTie = 1e-9;
+
+// The coordinate axis (positive) nearest to direction d; of tied ones, the first.
 Vec3 nearest_axis(const Vec3& d) {
-  Eigen::Index k;
-  d.cwiseAbs().maxCoeff(&k);
+  const Vec3 a = d.cwiseAbs();
+  const double largest = a.maxCoeff();
+  int k = 0;
+  while (a[k] < (1 - kTie) * largest) ++k;
   return Vec3::Unit(k);
 }
 }  // namespace
@@ -656,7 +662,7 @@ ViewAxes view_axes(const Positions& P, const Vec3& up) {
   Eigen::Index k;
   axes.up.cwiseAbs().maxCoeff(&k);
   const int a = (k + 1) % 3, b = (k + 2) % 3;
-  const int thin = extent[a] < extent[b] ? a : b;
+  const int thin = extent[a] < (1 - kTie) * extent[b] ? a : b;  // a tie (a square) gives b
   Vec3 front = Vec3::Unit(thin);
   front = (front - front.dot(axes.up) * axes.up).normalized();  // exactly across up when up is not an axis
   axes.front = front;

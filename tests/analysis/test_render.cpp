@@ -530,6 +530,22 @@ TEST_CASE("view axes: a flat shape is seen from above, others stand along their 
   CHECK_THROWS_AS(view_axes(flat.P, Vec3::Zero()), InvalidInput);
 }
 
+TEST_CASE("view axes: a square's view does not depend on where it sits", "[analysis][render][view]") {
+  // Break test: an exactly square flat shape has equal extents across its normal; moved far along x, the
+  // rounding of max - min decided which one was thinner and the picture turned by 90°.
+  const Scene flat = plane(2000);  // the unit square
+  const ViewAxes home = view_axes(flat.P);
+  // Offsets just below a power of two: there x + 1 crosses into the next binade and max - min rounds below 1.
+  for (const double offset : {7.624, 1023.013, 16383.405, 1e6})
+    for (int axis = 0; axis < 3; ++axis) {
+      INFO("moved by " << offset << " along axis " << axis);
+      const Positions moved = flat.P.rowwise() + offset * Vec3::Unit(axis).transpose();
+      const ViewAxes there = view_axes(moved);
+      CHECK(there.up == home.up);
+      CHECK(there.front == home.front);
+    }
+}
+
 TEST_CASE("view axes: CGAL's y-up armadillo stands upright, feet at the bottom of the picture",
           "[analysis][render][view]") {
   const TriangleSoup armadillo = load_soup(test::cgal_mesh("armadillo.off"));

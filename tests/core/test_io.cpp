@@ -189,7 +189,7 @@ TEST_CASE("polygons are triangulated, duplicate and repeated-index faces dropped
   CHECK(mesh_report.duplicate_faces_dropped == 2);
 }
 
-TEST_CASE("a corner listed twice in a row is read once; other repeats drop the face", "[core][io]") {
+TEST_CASE("a corner listed twice in a row is read once, other repeats drop the face", "[core][io]") {
   // Break test: `4 0 1 2 2` (a triangle written as a quad with its last corner repeated, as some exporters
   // do) was dropped as repeating a vertex, leaving a hole in the surface.
   test::TempDir tmp;

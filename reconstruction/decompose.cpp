@@ -92,7 +92,7 @@ std::string collapsed_piece_warning(const Positions& S, const Positions& B, cons
 // Remeshes B (the low-pass base) and moves the roles onto it. A remeshed base must stay as close to S as
 // B is (up to 1 % of the diagonal): an edge length beyond the base's curvature radius cuts the shape
 // (measured: edge 2 on the survey cylinder of radius 1 folds 765 triangles).
-void remesh_base(const Positions& S, const Region& region, double edge, Decomposition& d) {
+void remesh_base(const Positions& S, const Region& region, double edge, double diagonal, Decomposition& d) {
   RemeshResult r = remesh_isotropic(d.base, d.base_faces, edge);
   const std::vector<ClosestPoint> feet = ClosestPointQuery(r.P, r.F).query_all(S);  // S onto the new base
   DecompositionReport& report = d.report;
@@ -100,7 +100,7 @@ void remesh_base(const Positions& S, const Region& region, double edge, Decompos
   report.remesh_edge_length = edge;
   double far = 0;
   for (const ClosestPoint& c : feet) far = std::max(far, std::sqrt(c.squared_distance));
-  const double allowed = std::max(2 * report.check.max_height, 0.01 * bounding_box_diagonal(S));
+  const double allowed = std::max(2 * report.check.max_height, 0.01 * diagonal);
   const int nb = static_cast<int>(r.P.rows());
   if (!(far <= allowed)) {
     char text[300];
@@ -167,8 +167,8 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
     throw InvalidInput("decompose: the region has " + std::to_string(region.num_vertices()) +
                        " vertex labels but the mesh has " + std::to_string(S.rows()) + " vertices");
   o.validate("decompose");
+  const double diagonal = bounding_box_diagonal(S);
   if (o.kind == DecompositionKind::Remeshed && o.remesh_edge_length > 0) {  // before the low-pass's work
-    const double diagonal = bounding_box_diagonal(S);
     if (!(o.remesh_edge_length < diagonal)) {
       char text[300];
       std::snprintf(text, sizeof text,
@@ -225,13 +225,12 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
     report.warning =
         "decompose: no separate detail layer (" + report.low_pass.no_layer_reason +
         "), so the base is the mesh itself and there are no details: an edit is the base method's alone" +
-        (report.low_pass.all_boundary ? ""
-         : report.low_pass.automatic  ? "; --detail-scale sets a layer"
-                                      : "; a larger --detail-scale (or 0, the automatic scale) sets one");
+        (report.low_pass.all_boundary ? "" : std::string("; ") + report.low_pass.no_layer_remedy());
   else if (report.warning.empty())
     report.warning = collapsed_piece_warning(S, d.base, F);
   if (o.kind == DecompositionKind::Remeshed)
-    remesh_base(S, region, o.remesh_edge_length > 0 ? o.remesh_edge_length : mean_edge_length(S, F), d);
+    remesh_base(S, region, o.remesh_edge_length > 0 ? o.remesh_edge_length : mean_edge_length(S, F), diagonal,
+                d);
   // Without a detail layer (B = S, see low_pass_base) every encoding would give S' = B'.
   d.base_is_input = o.kind == DecompositionKind::LowPass && d.base == S;
   if (!d.hierarchy) d.edit = d.base, d.edit_faces = d.base_faces;

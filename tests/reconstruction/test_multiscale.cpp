@@ -456,7 +456,7 @@ TEST_CASE(
   none.prepare(smooth, tube.F, tube.region);
   REQUIRE(none.decomposition_report().low_pass.detail_scale == 0);
   CHECK(said(none, "no separate detail layer ("));
-  CHECK(said(none, "an edit is the base method's alone; --detail-scale sets a layer"));
+  CHECK(said(none, "an edit is the base method's alone; --detail-scale sets one"));
 }
 
 TEST_CASE("multiscale: the frame report counts folded triangles", "[reconstruction][multiscale]") {

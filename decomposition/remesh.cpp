@@ -20,7 +20,9 @@ namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using SurfaceMesh = CGAL::Surface_mesh<Kernel::Point_3>;
 namespace PMP = CGAL::Polygon_mesh_processing;
-constexpr double kCornerTurn = 0.5235987755982988;  // 30°: a turn of the outline that remeshing keeps
+// 25°: a turn of the outline that remeshing keeps. Not 360°/n for any n, so no regular polygon has its
+// corners at the threshold, where rounding would keep some and cut others (a 12-gon at 30°: 4 of 12 kept).
+constexpr double kCornerTurn = 0.4363323129985824;
 }  // namespace
 
 RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_edge_length, int iterations) {
@@ -49,15 +51,20 @@ RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_
   mesh.reserve(static_cast<SurfaceMesh::size_type>(P.rows()),
                static_cast<SurfaceMesh::size_type>(3 * F.rows()),
                static_cast<SurfaceMesh::size_type>(F.rows()));
-  std::vector<SurfaceMesh::Vertex_index> vertex(P.rows());
-  for (Eigen::Index v = 0; v < P.rows(); ++v)
-    vertex[v] = mesh.add_vertex(Kernel::Point_3(P(v, 0), P(v, 1), P(v, 2)));
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const int a = F(f, 0), b = F(f, 1), c = F(f, 2);
-    for (int i : {a, b, c})
+  // The vertices the faces use (one that no face uses has no surface to remesh: left out, not kept as an
+  // isolated vertex of the result).
+  std::vector<SurfaceMesh::Vertex_index> vertex(P.rows(), SurfaceMesh::null_vertex());
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int i = F(f, k);
       if (i < 0 || i >= P.rows())
         throw InvalidInput(who + ": face " + std::to_string(f) + " has vertex index " + std::to_string(i) +
                            " out of range [0, " + std::to_string(P.rows()) + ")");
+      if (vertex[i] == SurfaceMesh::null_vertex())
+        vertex[i] = mesh.add_vertex(Kernel::Point_3(P(i, 0), P(i, 1), P(i, 2)));
+    }
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const int a = F(f, 0), b = F(f, 1), c = F(f, 2);
     if (a == b || b == c || c == a)
       throw InvalidInput(who + ": face " + std::to_string(f) + " repeats a vertex");
     if (mesh.add_face(vertex[a], vertex[b], vertex[c]) == SurfaceMesh::null_face())

@@ -98,24 +98,38 @@ void remesh_base(const Positions& S, const Region& region, double edge, double d
   DecompositionReport& report = d.report;
   report.remeshed_vertices = static_cast<int>(r.P.rows());
   report.remesh_edge_length = edge;
+  // Vertices of S that no face uses have no surface to lie on: they take no part (CGAL's cube-ouvert.off has
+  // one 1 unit off its surface, and every edge length was refused as lying 1 from the input).
+  std::vector<char> used(S.rows(), 0);
+  for (Eigen::Index f = 0; f < d.base_faces.rows(); ++f)
+    for (int k = 0; k < 3; ++k) used[d.base_faces(f, k)] = 1;
   double far = 0;
-  for (const ClosestPoint& c : feet) far = std::max(far, std::sqrt(c.squared_distance));
+  long far_vertex = -1;
+  bool free_used = false;
+  for (long v = 0; v < S.rows(); ++v) {
+    if (!used[v]) continue;
+    free_used = free_used || region.is_free(static_cast<int>(v));
+    if (const double distance = std::sqrt(feet[v].squared_distance); !(distance <= far))
+      far = distance, far_vertex = v;
+  }
   const double allowed = std::max(2 * report.check.max_height, 0.01 * diagonal);
   const int nb = static_cast<int>(r.P.rows());
   if (!(far <= allowed)) {
-    char text[300];
-    std::snprintf(text, sizeof text, "decompose: the base remeshed to edge length %g (%d vertices) lies up to %.3g "
-                  "from the input, more than %.3g (twice the detail height, or 1 %% of the diagonal): the edges are "
-                  "too long for the shape; use a smaller --remesh-base", edge, report.remeshed_vertices, far, allowed);
+    char text[360];
+    std::snprintf(text, sizeof text,
+                  "decompose: the base remeshed to edge length %g (%d vertices) lies up to %.3g "
+                  "from the input (at vertex %ld), more than %.3g (twice the detail height, or 1 %% of the "
+                  "diagonal): the edges are too long for the shape; use a smaller --remesh-base",
+                  edge, report.remeshed_vertices, far, far_vertex, allowed);
     throw InvalidInput(text);
   }
   // Every triangle that holds the closest point of a fixed or handle vertex of S gets that vertex's role on
   // all its corners, so those base points move exactly with their handle (or stay); the rest are free.
   std::vector<int> codes(r.P.rows(), Region::kFree);
   for (int v : region.constrained_vertices())
-    for (int k = 0; k < 3; ++k) codes[r.F(feet[v].face, k)] = region.code(v);
-  if (std::find(codes.begin(), codes.end(), Region::kFree) == codes.end() &&
-      !region.free_vertices().empty()) {
+    if (used[v])
+      for (int k = 0; k < 3; ++k) codes[r.F(feet[v].face, k)] = region.code(v);
+  if (std::find(codes.begin(), codes.end(), Region::kFree) == codes.end() && free_used) {
     char text[300];  // measured: edge 0.9 of the diagonal on a 400-vertex grid: 5 base vertices, all placed
     std::snprintf(
         text, sizeof text,

@@ -110,6 +110,40 @@ TEST_CASE("remesh_isotropic: closed sphere stays closed and on the input", "[dec
   CHECK(radius.minCoeff() >= 0.99);
 }
 
+TEST_CASE("remesh_isotropic: a regular polygon's corners stay, and vertices no face uses are left out",
+          "[decomposition][remesh]") {
+  // Break test: the corners of a regular 12-gon turn by exactly 30°, the threshold then: rounding kept 4 of
+  // the 12 and cut 8 (up to 0.087 away), so a symmetric outline gave an asymmetric base.
+  for (const int n : {8, 12, 13}) {
+    INFO(n << "-gon");
+    Positions P;
+    Faces F;
+    test::fan_disk(n, P, F);
+    const RemeshResult r = remesh_isotropic(P, F, 1.0, 3);  // longer than the sides: the border collapses
+    int kept = 0;
+    for (int i = 1; i <= n; ++i)
+      for (Eigen::Index w = 0; w < r.P.rows(); ++w)
+        if ((r.P.row(w) - P.row(i)).norm() <= 1e-14) {
+          ++kept;
+          break;
+        }
+    CHECK(kept == n);
+  }
+  // Break test: CGAL's cube-ouvert.off lists a vertex no face uses; it came back as an isolated vertex of the
+  // remeshed base, where the shell refused it as a free vertex with nothing to hold it.
+  Positions P;
+  Faces F;
+  test::fan_disk(6, P, F);
+  P.conservativeResize(P.rows() + 1, 3);
+  P.row(P.rows() - 1) << 1, 2, 1;
+  const RemeshResult r = remesh_isotropic(P, F, 0.3, 3);
+  std::vector<char> used(r.P.rows(), 0);
+  for (Eigen::Index f = 0; f < r.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) used[r.F(f, k)] = 1;
+  CHECK(std::count(used.begin(), used.end(), 0) == 0);
+  CHECK(r.P.col(2).cwiseAbs().maxCoeff() == 0.0);
+}
+
 TEST_CASE("remesh_isotropic: bumpy plane, zero iterations, and bad input",
           "[decomposition][remesh][bad-input]") {
   SceneOptions o;
@@ -118,7 +152,7 @@ TEST_CASE("remesh_isotropic: bumpy plane, zero iterations, and bad input",
   const RemeshResult r = remesh_isotropic(s.P, s.F, 0.02, 2);
   CHECK(r.P.allFinite());
   for (int v : border_vertices(r.F)) REQUIRE(on_unit_square_border(r.P.row(v)));
-  // Zero iterations only splits the border edges longer than the target.
+  // Zero iterations leaves the mesh as it is.
   const RemeshResult same = remesh_isotropic(s.smooth, s.F, 1.0, 0);
   CHECK(same.P.rows() == s.smooth.rows());
   CHECK(same.F.rows() == s.F.rows());

@@ -686,7 +686,21 @@ Vec3 principal_up(const Positions& P, bool& flat) {
   int order[3] = {0, 1, 2};  // by extent (the eigenvalues order the variances, not the extents)
   std::sort(order, order + 3, [&](int i, int j) { return extent[i] < extent[j]; });
   flat = extent[order[0]] < 0.15 * extent[order[1]];
-  return axes.col(flat ? order[0] : order[2]);
+  const int chosen = flat ? order[0] : order[2];
+  // Where the chosen axis's variance equals another's to rounding (a sphere, a cube, any shape with the
+  // symmetry of a regular solid), the axis is any direction of a plane or of space, and the eigen-solver's
+  // pick follows the rounding: the picture turned with the shape's size or place. The bounding box's longest
+  // coordinate axis (of tied ones, the first) decides there.
+  const Vec3 variance = pca.eigenvalues();
+  for (int i = 0; i < 3; ++i)
+    if (i != chosen && std::abs(variance[i] - variance[chosen]) <= 1e-6 * variance.cwiseAbs().maxCoeff()) {
+      const Vec3 box = P.colwise().maxCoeff() - P.colwise().minCoeff();
+      int k = 0;
+      while (box[k] < (1 - kTie) * box.maxCoeff()) ++k;
+      flat = false;
+      return Vec3::Unit(k);
+    }
+  return axes.col(chosen);
 }
 }  // namespace
 

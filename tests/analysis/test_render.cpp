@@ -530,6 +530,30 @@ TEST_CASE("view axes: a flat shape is seen from above, others stand along their 
   CHECK_THROWS_AS(view_axes(flat.P, Vec3::Zero()), InvalidInput);
 }
 
+TEST_CASE("view axes: a sphere's or a cube's view does not depend on its size or place",
+          "[analysis][render][view]") {
+  // Break test: the principal axes of a shape with a regular solid's symmetry are any directions (equal
+  // variances), and the eigen-solver's pick followed the rounding: a sphere scaled by 1e-3 stood along x
+  // instead of y, a cube turned by 20° changed its picture in 9 of 16 sizes and places.
+  Positions sphere;
+  Faces sphere_faces;
+  test::icosphere(3, sphere, sphere_faces);
+  Positions cube(8, 3);
+  for (int i = 0; i < 8; ++i) cube.row(i) << (i & 1), (i >> 1) & 1, (i >> 2) & 1;
+  const Mat3 turn = Eigen::AngleAxisd(20 * M_PI / 180, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  const Positions turned_cube = cube * turn.transpose();
+  for (const Positions* shape : {static_cast<const Positions*>(&sphere), &turned_cube}) {
+    const ViewAxes home = view_axes(*shape);
+    for (const double scale : {1e-3, 0.7, 3.0, 1e5})
+      for (const double offset : {0.0, 7.624, 1e6}) {
+        INFO(shape->rows() << " vertices, scale " << scale << ", offset " << offset);
+        const ViewAxes there = view_axes((scale * *shape).array() + offset);
+        CHECK(there.up == home.up);
+        CHECK(there.front == home.front);
+      }
+  }
+}
+
 TEST_CASE("view axes: a square's view does not depend on where it sits", "[analysis][render][view]") {
   // Break test: an exactly square flat shape has equal extents across its normal; moved far along x, the
   // rounding of max - min decided which one was thinner and the picture turned by 90°.

@@ -46,6 +46,11 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
   progress(name_ + ": preparing the base deformer (" + base_deformer_->name() + ") on " +
            std::to_string(d.edit.rows()) + " base vertices");
   base_deformer_->set_progress(progress_callback());
+  // A remeshed base or a control mesh numbers its own vertices: the base deformer's messages say so (a
+  // remeshed base's warning named base vertices 30 and 37, which the user looked for in S).
+  const bool own_numbering =
+      options_.decomposition.kind == DecompositionKind::Remeshed || d.edit.rows() != S.rows();
+  const std::string numbering = own_numbering ? "(vertex numbers of the base's own mesh) " : "";
   try {
     base_deformer_->prepare(d.edit, d.edit_faces, d.edit_region);
   } catch (const InvalidInput& e) {  // a refusal of the mesh's structure (a fan too large to factor): S's too
@@ -58,10 +63,12 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
     const char* cause =
         d.base_is_input
             ? "the input mesh (the base is the mesh itself here); it is degenerate there, repair it: "
+        : options_.decomposition.kind == DecompositionKind::Remeshed
+            ? "the remeshed base B; a smaller --remesh-base may help: "
             : "the base B. Where the input mesh is degenerate too (the method alone fails on it), "
               "repair the input; otherwise the base is, and a smaller detail scale may help: ";
     throw SolverError(name_ + ": the base deformer " + base_deformer_->name() + " failed on " + cause +
-                      e.what());
+                      numbering + e.what());
   }
   // B has S's outliers and S's region: Deformer::prepare has warned about their outliers, torn edges,
   // zero-area cuts and needles on S already.
@@ -73,7 +80,7 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
     };
     if (!said(kOutlierWarning) && !said(kTornEdgesWarning) && !said(kZeroAreaCutWarning) &&
         !said(kNeedleWarning))
-      prepare_warnings_.push_back(w);
+      prepare_warnings_.push_back(own_numbering ? "on the base B " + numbering + w : w);
   }
   encoding_->set_anchor_vertices(region.constrained_vertices());
   encoding_->set_placed_vertices(region.constrained_vertices());  // do_deform places them itself
@@ -163,8 +170,10 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
              ? "a mirroring handle transform folds the surface around it whatever the encoding; elsewhere "
              : "") +
         (d.hierarchy ? "a finer control mesh or the low-pass base keeps them apart"
-                     : "a smaller detail scale keeps them apart (the other encodings fold more or less "
-                       "depending on the edit: msdeform compare measures them)"));
+         : options_.decomposition.kind == DecompositionKind::Remeshed
+             ? "another --remesh-base or a smaller detail scale keeps them apart"
+             : "a smaller detail scale keeps them apart (the other encodings fold more or less "
+               "depending on the edit: msdeform compare measures them)"));
 }
 
 void MultiscaleDeformer::do_reset() {

@@ -25,14 +25,8 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 constexpr double kCornerTurn = 0.4363323129985824;
 }  // namespace
 
-RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_edge_length, int iterations) {
-  const std::string who = "remesh_isotropic";
-  if (!(target_edge_length > 0) || !std::isfinite(target_edge_length))
-    throw InvalidInput(who + ": target edge length " + std::to_string(target_edge_length) +
-                       " must be finite and positive");
-  if (iterations < 0)
-    throw InvalidInput(who + ": iterations " + std::to_string(iterations) + " must be >= 0");
-  check_finite(P, who.c_str(), "the mesh");
+void check_remesh_size(const Positions& P, const Faces& F, double target_edge_length,
+                       const std::string& who) {
   // Equilateral triangles of the target edge cover the area in about area / (√3/4 · edge²) of them.
   double area = 0;
   for (Eigen::Index f = 0; f < F.rows(); ++f)
@@ -46,6 +40,17 @@ RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_
                   std::sqrt(area / (0.4330127018922193 * kMaxRemeshTriangles)));
     throw InvalidInput(who + text);
   }
+}
+
+RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_edge_length, int iterations) {
+  const std::string who = "remesh_isotropic";
+  if (!(target_edge_length > 0) || !std::isfinite(target_edge_length))
+    throw InvalidInput(who + ": target edge length " + std::to_string(target_edge_length) +
+                       " must be finite and positive");
+  if (iterations < 0)
+    throw InvalidInput(who + ": iterations " + std::to_string(iterations) + " must be >= 0");
+  check_finite(P, who.c_str(), "the mesh");
+  check_remesh_size(P, F, target_edge_length, who);
 
   SurfaceMesh mesh;
   mesh.reserve(static_cast<SurfaceMesh::size_type>(P.rows()),

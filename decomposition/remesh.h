@@ -31,4 +31,9 @@ constexpr double kMaxRemeshTriangles = 2e7;
 RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_edge_length,
                               int iterations = 3);
 
+//! The size check of remesh_isotropic alone (P, F finite, indices in range; a face out of range is not
+//! counted), for callers that refuse before their own work. \throw InvalidInput as remesh_isotropic,
+//! prefixed with `who`.
+void check_remesh_size(const Positions& P, const Faces& F, double target_edge_length, const std::string& who);
+
 }  // namespace msd

@@ -192,6 +192,7 @@ Decomposition decompose(const Positions& S, const Faces& F, const Region& region
                     o.remesh_edge_length, diagonal);
       throw InvalidInput(text);
     }
+    check_remesh_size(S, F, o.remesh_edge_length, "decompose: --remesh-base");  // S's area is about B's
   }
   Decomposition d;
   DecompositionReport& report = d.report;

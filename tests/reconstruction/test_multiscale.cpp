@@ -18,6 +18,7 @@
 
 using namespace msd;
 using Catch::Matchers::Contains;
+using Catch::Matchers::StartsWith;
 
 namespace {
 
@@ -191,6 +192,11 @@ TEST_CASE(
   CHECK_THROWS_WITH(
       MultiscaleDeformer(o).prepare(mesh, s.region),
       Contains("not shorter than the mesh's bounding-box diagonal") && Contains("--remesh-base"));
+  // Too short: refused before the low-pass (it was refused by remesh_isotropic after it, 3.5 s on the survey
+  // plane).
+  o.decomposition.remesh_edge_length = 1e-6 * diag;
+  CHECK_THROWS_WITH(MultiscaleDeformer(o).prepare(mesh, s.region),
+                    StartsWith("decompose: --remesh-base: edge length") && Contains("at most 2e+07"));
   o.decomposition.remesh_edge_length = 0.9 * diag;  // the outline resampled too: 5 base vertices, none free
   CHECK_THROWS_WITH(MultiscaleDeformer(o).prepare(mesh, s.region),
                     Contains("has no free vertex") && Contains("--remesh-base"));

@@ -15,8 +15,8 @@ struct LoadReport {
   //! 180°, a concave polygon) the best-shaped split.
   int polygons_triangulated = 0;
   int polygons_split_otherwise = 0;  //!< of those, the ones not split into their first corner's fan
-  int degenerate_faces_skipped = 0;  //!< faces that repeat a vertex index other than in a row, or of fewer
-                                     //!< than 3 distinct corners (dropped)
+  //! Faces that repeat a vertex index other than in a row, or have fewer than 3 distinct corners (dropped).
+  int degenerate_faces_skipped = 0;
   //! Faces listing a corner twice in a row (`4 a b c c`, or first and last): read without the repetition,
   //! as the polygon of the remaining corners.
   int repeated_corners_merged = 0;

@@ -217,8 +217,8 @@ class CageDeformer : public SpaceDeformer {
   CageOptions options_;
   Positions cage_P_;
   Faces cage_F_;
-  Vec3 cage_origin_ =
-      Vec3::Zero();  // the cage's bounding-box centre: mvc_ and harmonic_ take points relative to it
+  // The cage's bounding-box centre: mvc_ and harmonic_ take points relative to it.
+  Vec3 cage_origin_ = Vec3::Zero();
   MeanValueCage mvc_;
   std::unique_ptr<HarmonicCoordinates> harmonic_;
 };

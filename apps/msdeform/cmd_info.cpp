@@ -40,8 +40,9 @@ void print_info(const std::string& what, const MeshInfo& i, const LoadReport* re
     std::printf("\n");
     std::printf("  repeated-index faces  %d (dropped)\n", report->degenerate_faces_skipped);
     if (report->repeated_corners_merged > 0)
-      std::printf("  corners listed twice  %d faces (in a row: read without the repetition)\n",
-                  report->repeated_corners_merged);
+      std::printf(
+          "  repeated corners      %d (faces listing a corner twice in a row: read without the repetition)\n",
+          report->repeated_corners_merged);
     std::printf("  duplicate faces       %d (dropped)\n", report->duplicate_faces_dropped);
     if (report->first_attribute_line > 0)
       std::printf(

@@ -641,14 +641,20 @@ namespace {
 // choice must not follow rounding (a square moved along x turned its picture by 90°).
 constexpr double kTie = 1e-9;
 
-// The coordinate axis (positive) nearest to direction d; of tied ones, the first.
-Vec3 nearest_axis(const Vec3& d) {
-  const Vec3 a = d.cwiseAbs();
-  const double largest = a.maxCoeff();
+// The index of the largest (or smallest) of v's non-negative entries; of tied ones `preferred` where it is
+// one of them, else the first.
+int extreme_index(const Vec3& v, bool smallest = false, int preferred = -1) {
+  const auto is_extreme = [&](int k) {
+    return smallest ? v[k] <= (1 + kTie) * v.minCoeff() : v[k] >= (1 - kTie) * v.maxCoeff();
+  };
+  if (preferred >= 0 && is_extreme(preferred)) return preferred;
   int k = 0;
-  while (a[k] < (1 - kTie) * largest) ++k;
-  return Vec3::Unit(k);
+  while (!is_extreme(k)) ++k;
+  return k;
 }
+
+// The coordinate axis (positive) nearest to direction d; of tied ones, the first.
+Vec3 nearest_axis(const Vec3& d) { return Vec3::Unit(extreme_index(d.cwiseAbs())); }
 }  // namespace
 
 ViewAxes view_axes(const Positions& P, const Vec3& up) {
@@ -687,20 +693,24 @@ Vec3 principal_up(const Positions& P, bool& flat) {
   std::sort(order, order + 3, [&](int i, int j) { return extent[i] < extent[j]; });
   flat = extent[order[0]] < 0.15 * extent[order[1]];
   const int chosen = flat ? order[0] : order[2];
-  // Where the chosen axis's variance equals another's to rounding (a sphere, a cube, any shape with the
-  // symmetry of a regular solid), the axis is any direction of a plane or of space, and the eigen-solver's
-  // pick follows the rounding: the picture turned with the shape's size or place. The bounding box's longest
-  // coordinate axis (of tied ones, the first) decides there.
+  // Two variances equal to rounding (a sphere, a cube, a cylinder, a regular prism) make the principal
+  // directions in their plane arbitrary: the eigen-solver's pick follows the rounding, and so did the extents
+  // measured along them, and the picture turned with the shape's size or place. Where the choice depends on
+  // such directions (any tie for an upright shape, a tie with the chosen axis for a flat one), the bounding
+  // box decides: its longest coordinate axis (flat: its thinnest), of tied ones the axis of the variance no
+  // other shares (a cylinder's), else the first.
   const Vec3 variance = pca.eigenvalues();
+  const double tolerance = 1e-6 * variance.cwiseAbs().maxCoeff();
+  const auto tied = [&](int i, int j) { return i != j && std::abs(variance[i] - variance[j]) <= tolerance; };
+  bool ambiguous = false;
   for (int i = 0; i < 3; ++i)
-    if (i != chosen && std::abs(variance[i] - variance[chosen]) <= 1e-6 * variance.cwiseAbs().maxCoeff()) {
-      const Vec3 box = P.colwise().maxCoeff() - P.colwise().minCoeff();
-      int k = 0;
-      while (box[k] < (1 - kTie) * box.maxCoeff()) ++k;
-      flat = false;
-      return Vec3::Unit(k);
-    }
-  return axes.col(chosen);
+    for (int j = 0; j < 3; ++j) ambiguous = ambiguous || (tied(i, j) && (!flat || i == chosen));
+  if (!ambiguous) return axes.col(chosen);
+  int distinct = -1;
+  for (int i = 0; i < 3; ++i)
+    if (!tied(i, 0) && !tied(i, 1) && !tied(i, 2)) distinct = extreme_index(axes.col(i).cwiseAbs());
+  const Vec3 box = P.colwise().maxCoeff() - P.colwise().minCoeff();
+  return Vec3::Unit(extreme_index(box, flat, distinct));
 }
 }  // namespace
 

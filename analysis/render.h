@@ -83,8 +83,9 @@ struct RenderOptions {
 //! vertices (P #V×3): a flat shape (thinnest principal extent below 0.15 of the middle one, e.g. a
 //! terrain or the bumpy plane) is seen from above its thinnest axis, anything else stands along its
 //! longest (a figure such as the y-up armadillo); each axis is snapped to the nearest coordinate axis, the
-//! positive one (meshes are mostly authored so). Where that principal axis is not defined (its variance
-//! equal to another's within 1e-6: a sphere, a cube), the bounding box's longest coordinate axis is up.
+//! positive one (meshes are mostly authored so). Where the choice depends on principal directions that are
+//! not defined (two variances equal within 1e-6: a sphere, a cube, a cylinder), the bounding box's longest
+//! coordinate axis is up (flat: its thinnest), of tied ones the shape's own axis where it has one.
 //! Ties (extents or directions within 1e-9) go to the first axis, so the view does not depend on the
 //! shape's size or place. `front` is the remaining coordinate axis of smaller
 //! extent, so the camera faces the broad side. For the z-up bumpy plane this gives RenderOptions's default.

@@ -542,12 +542,23 @@ TEST_CASE("view axes: a sphere's or a cube's view does not depend on its size or
   for (int i = 0; i < 8; ++i) cube.row(i) << (i & 1), (i >> 1) & 1, (i >> 2) & 1;
   const Mat3 turn = Eigen::AngleAxisd(20 * M_PI / 180, Vec3(1, 2, 3).normalized()).toRotationMatrix();
   const Positions turned_cube = cube * turn.transpose();
-  for (const Positions* shape : {static_cast<const Positions*>(&sphere), &turned_cube}) {
+  // A second break test: a 32-sided cylinder along z (radius 1, height 2: its bounding box a cube) has two
+  // equal variances; the extents measured along the arbitrary directions between them decided, and it stood
+  // up or lay down with its place and size (scale 1e5, offset (55.5, 0, 0)·scale).
+  Positions cylinder(64, 3);
+  for (int i = 0; i < 32; ++i) {
+    const double a = 2 * M_PI * i / 32;
+    cylinder.row(i) << std::cos(a), std::sin(a), -1;
+    cylinder.row(32 + i) << std::cos(a), std::sin(a), 1;
+  }
+  CHECK(view_axes(cylinder).up == Vec3::UnitZ());  // along its own axis, where the box has no longest side
+  for (const Positions* shape : std::initializer_list<const Positions*>{&sphere, &turned_cube, &cylinder}) {
     const ViewAxes home = view_axes(*shape);
     for (const double scale : {1e-3, 0.7, 3.0, 1e5})
-      for (const double offset : {0.0, 7.624, 1e6}) {
-        INFO(shape->rows() << " vertices, scale " << scale << ", offset " << offset);
-        const ViewAxes there = view_axes((scale * *shape).array() + offset);
+      for (const Vec3 offset : {Vec3(0, 0, 0), Vec3(7.624, 7.624, 7.624), Vec3(1e6, 1e6, 1e6),
+                                Vec3(55.5, 0, 0), Vec3(1023.013, -55.1, 3.3)}) {
+        INFO(shape->rows() << " vertices, scale " << scale << ", offset " << offset.transpose());
+        const ViewAxes there = view_axes((scale * *shape).rowwise() + scale * offset.transpose());
         CHECK(there.up == home.up);
         CHECK(there.front == home.front);
       }

@@ -15,6 +15,10 @@ struct LocalFrame {
   //! The frame of P (#V by 3): its bounding box's centre and diagonal (scale 1 when all points coincide).
   static LocalFrame of(const Positions& P);
   Positions to_local(const Positions& X) const { return (X.rowwise() - centre.transpose()) / scale; }
+  //! Into out (no allocation once it has X's size).
+  void to_local(const Positions& X, Positions& out) const {
+    out = (X.rowwise() - centre.transpose()) / scale;
+  }
   Vec3 to_local(const Vec3& x) const { return (x - centre) / scale; }
   //! In place, allocation-free.
   void to_world(Positions& X) const {

@@ -488,7 +488,7 @@ double ArapDeformer::anderson_step(double energy) {
 
 void ArapDeformer::run(const Positions& world_targets, Positions& out) {
   local_seconds_ = global_seconds_ = 0;
-  local_targets_ = (world_targets.rowwise() - local_.centre.transpose()) / local_.scale;
+  local_.to_local(world_targets, local_targets_);
   const Positions& targets = local_targets_;
   for (size_t c = 0; c < constrained_.size(); ++c) x_.row(constrained_[c]) = targets.row(c);
   // The constrained part of the global step's right-hand side, fixed for the frame: −Q_uk x_k.
@@ -558,7 +558,8 @@ void ArapDeformer::run(const Positions& world_targets, Positions& out) {
   frame_report_.iterations = iterations;
   frame_report_.residual = step / diagonal_;
   frame_report_.converged = converged;
-  out = (x_ * local_.scale).rowwise() + local_.centre.transpose();
+  out = x_;
+  local_.to_world(out);
   // The constrained vertices exactly where asked (the round trip through the local frame rounds).
   for (size_t c = 0; c < constrained_.size(); ++c) out.row(constrained_[c]) = world_targets.row(c);
 }

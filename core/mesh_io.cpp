@@ -1170,12 +1170,24 @@ Mesh load_mesh(const std::string& path, LoadReport* report) {
 void save_mesh(const Positions& P, const Faces& F, const std::string& path, const SaveOptions& options) {
   const std::string ext = file_extension(path);
   check_mesh_format(path, "save_mesh");
-  if (!P.allFinite()) throw InvalidInput("save_mesh: " + path + ": positions contain NaN or inf; nothing written");
+  // The first vertex whose row (of P, or of the scalars) holds NaN or inf.
+  const auto first_non_finite = [](const auto& rows) {
+    Eigen::Index v = 0;
+    while (v < rows.rows() && rows.row(v).allFinite()) ++v;
+    return std::to_string(v);
+  };
+  if (!P.allFinite())
+    throw InvalidInput("save_mesh: " + path + ": positions contain NaN or inf (the first at vertex " +
+                       first_non_finite(P) + "); nothing written");
   if (options.vertex_scalar) {
     if (ext != ".ply") throw InvalidInput("save_mesh: " + path + ": per-vertex scalars need the .ply format");
     if (options.vertex_scalar->size() != P.rows())
       throw InvalidInput("save_mesh: " + path + ": " + std::to_string(options.vertex_scalar->size()) +
                          " scalars for " + std::to_string(P.rows()) + " vertices");
+    // Readers take NaN in a PLY property differently (or not at all): refused as positions are.
+    if (!options.vertex_scalar->allFinite())
+      throw InvalidInput("save_mesh: " + path + ": the scalar is NaN or inf at vertex " +
+                         first_non_finite(*options.vertex_scalar) + "; nothing written");
     const std::string& name = options.scalar_name;  // a PLY word, and not a coordinate's name
     if (name.empty() || name == "x" || name == "y" || name == "z" ||
         std::any_of(name.begin(), name.end(),
@@ -1291,6 +1303,35 @@ void save_mesh(const Positions& P, const Faces& F, const std::string& path, cons
 
 void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& options) {
   save_mesh(positions(mesh), faces(mesh), path, options);
+}
+
+StlReadBack stl_read_back(const Positions& P, const Faces& F) {
+  const long nv = P.rows();
+  StlReadBack out;
+  std::vector<long> first_use;  // vertices in the order faces first use them
+  std::vector<char> used(static_cast<size_t>(nv), 0);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int v = F(f, k);
+      if (v < 0 || v >= nv)
+        throw InvalidInput("stl_read_back: face " + std::to_string(f) + " has vertex index " +
+                           std::to_string(v) + " out of range [0, " + std::to_string(nv) + ")");
+      if (!used[v]) used[v] = 1, first_use.push_back(v);
+    }
+  out.unused = static_cast<int>(nv - static_cast<long>(first_use.size()));
+  // Equal points (+0 and -0 alike, as the reader joins them) among the used vertices.
+  std::vector<std::pair<std::array<double, 3>, long>> points(first_use.size());
+  for (size_t k = 0; k < first_use.size(); ++k) {
+    const long v = first_use[k];
+    points[k] = {{P(v, 0) + 0.0, P(v, 1) + 0.0, P(v, 2) + 0.0}, v};
+  }
+  std::sort(points.begin(), points.end());
+  for (size_t k = 1; k < points.size(); ++k) out.merged += points[k].first == points[k - 1].first;
+  out.vertices = static_cast<int>(first_use.size()) - out.merged;
+  out.renumbered = out.unused > 0 || out.merged > 0;
+  for (size_t k = 0; k < first_use.size() && !out.renumbered; ++k)
+    out.renumbered = first_use[k] != static_cast<long>(k);
+  return out;
 }
 
 }  // namespace msd

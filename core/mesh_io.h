@@ -75,9 +75,21 @@ struct SaveOptions {
 //! STL keeps no vertex list: vertices no face uses are lost, and a point cloud is refused.
 //! \throw InvalidInput for an unknown extension, a scalar with a non-PLY format, of the wrong size or
 //! with a name PLY readers would misread (empty, with spaces or control characters, or x, y, z),
-//! non-finite positions, an STL without faces, or an unwritable path.
+//! non-finite positions or scalars (naming the first vertex), an STL without faces, or an unwritable path.
 void save_mesh(const Positions& P, const Faces& F, const std::string& path, const SaveOptions& options = {});
 void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& options = {});
+
+//! What reading back save_mesh's STL of (P #V×3, F #F×3) gives: STL keeps no vertex list, so a reader
+//! numbers the distinct corners in the order faces first use them.
+struct StlReadBack {
+  int vertices = 0;  //!< vertices of the file read back
+  int unused = 0;    //!< vertices no face uses, lost
+  int merged = 0;    //!< used vertices at the point of a lower-numbered one, joined with it
+  bool renumbered =
+      false;  //!< the read-back numbering differs from P's (so a selection for P no longer applies)
+};
+//! 	hrow InvalidInput for an index of F outside [0, #V).
+StlReadBack stl_read_back(const Positions& P, const Faces& F);
 
 //! The values of a PLY file's per-vertex property `name` (#V, in the file's vertex order), e.g. the
 //! 'detail' heights `msdeform decompose` writes or the 'detail_change' of `msdeform compare`'s meshes.

@@ -25,9 +25,10 @@ Region Region::from_codes(std::vector<int> codes) {
   const long max_code = kFirstHandle + static_cast<long>(codes.size()) - 1;
   for (size_t v = 0; v < codes.size(); ++v)
     if (codes[v] < 0 || codes[v] > max_code)
-      throw InvalidInput("Region: vertex " + std::to_string(v) + " has selection code " + std::to_string(codes[v]) +
-                         " (0 fixed, 1 free, 2+k handle k, at most " + std::to_string(max_code) + " for " +
-                         std::to_string(codes.size()) + " vertices)");
+      throw InvalidInput(
+          "Region: vertex " + std::to_string(v) + " has selection code " + std::to_string(codes[v]) +
+          " (0 fixed, 1 free, 2+k handle k; handle codes are consecutive, so " +
+          std::to_string(codes.size()) + " vertices carry codes up to " + std::to_string(max_code) + ")");
   r.codes_ = std::move(codes);
   for (int c : r.codes_) r.num_handles_ = std::max(r.num_handles_, c - kFirstHandle + 1);
   return r;
@@ -217,6 +218,12 @@ Region read_sel(const std::string& path, int num_vertices) {
 }
 
 void write_sel(const Region& region, const std::string& path) {
+  // Not a file every reader refuses: a handle code skipped (codes 0, 1, 3) fails validate().
+  try {
+    region.validate(region.num_vertices());
+  } catch (const InvalidInput& e) {
+    throw InvalidInput("write_sel: " + path + ": " + e.what() + "; nothing was written");
+  }
   std::string out = "# " + std::to_string(region.num_vertices()) +
                     " vertices\n# per vertex status: 0=fixed, 1=deformable-region, 2+k=handle k\n";
   for (int c : region.codes()) out += std::to_string(c) + "\n";

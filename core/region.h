@@ -70,7 +70,9 @@ class Region {
 //! msdeform extends 2 + k to handle k). \throw InvalidInput with file and line on a wrong count, a code
 //! that is not a non-negative integer, or a missing file.
 Region read_sel(const std::string& path, int num_vertices);
-//! Writes codes as a .sel file (atomically).
+//! Writes codes as a .sel file (atomically). \throw InvalidInput, before anything is written, for handle
+//! codes that are not consecutive (a handle with no vertex below one that has some), which validate()
+//! refuses.
 void write_sel(const Region& region, const std::string& path);
 
 //! Reads a libigl dense-matrix (.dmat) group file, one column of num_vertices integers: -1 free,

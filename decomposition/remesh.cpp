@@ -14,6 +14,7 @@
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 
 namespace msd {
 namespace {
@@ -45,7 +46,7 @@ void check_remesh_size(const Positions& P, const Faces& F, double target_edge_le
 RemeshResult remesh_isotropic(const Positions& P, const Faces& F, double target_edge_length, int iterations) {
   const std::string who = "remesh_isotropic";
   if (!(target_edge_length > 0) || !std::isfinite(target_edge_length))
-    throw InvalidInput(who + ": target edge length " + std::to_string(target_edge_length) +
+    throw InvalidInput(who + ": target edge length " + format_number(target_edge_length) +
                        " must be finite and positive");
   if (iterations < 0)
     throw InvalidInput(who + ": iterations " + std::to_string(iterations) + " must be >= 0");

@@ -210,9 +210,10 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
     if (const std::string problem = check.problem(); !problem.empty())
       throw TopologyError(name() + ": " + problem + "; a surface method needs a manifold, orientable triangle mesh");
     if (check.flipped_faces > 0)
-      prepare_warnings_.push_back(name() + ": " + std::to_string(check.flipped_faces) +
-                                  " face(s) wound against their neighbours (normals and detail directions flip "
-                                  "there); orient them first (check_surface, or load the mesh with load_mesh)");
+      prepare_warnings_.push_back(
+          name() + ": " + std::to_string(check.flipped_faces) +
+          " face(s) wound against their neighbours (normals and detail directions flip "
+          "there); orient them first (loading the mesh with load_mesh does)");
   }
   if (surface && traits().cotan_laplacian) {
     // These methods leave degenerate triangles out: a fixed part or handle touching only those holds or

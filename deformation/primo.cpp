@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/core/rotation.h"
@@ -49,7 +50,8 @@ PrimoDeformer::PrimoDeformer(PrimoOptions options) : options_(options) {
     throw InvalidInput("primo: the thickness must be finite and > 0 (got " + std::to_string(options_.thickness) + ")");
   set_max_iterations(options_.max_iterations);
   if (!std::isfinite(options_.tolerance) || options_.tolerance < 0)
-    throw InvalidInput("primo: the tolerance must be finite and >= 0 (got " + std::to_string(options_.tolerance) + ")");
+    throw InvalidInput("primo: the tolerance must be finite and >= 0 (got " +
+                       format_number(options_.tolerance) + ")");
 }
 
 DeformerTraits PrimoDeformer::traits() const {

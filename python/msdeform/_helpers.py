@@ -103,9 +103,12 @@ def rotation(axis, degrees, about=None):
 
 def scaling(factor, about=None):
     """The 4x4 float64 scaling by `factor` (a number, or 3 numbers per axis) about the point `about`
-    (default the origin)."""
+    (default the origin). Raises ValueError for a zero factor (the command line's --scale refuses it too:
+    it flattens the handle, and no deformation follows a singular transform)."""
     f = np.asarray(factor, dtype=np.float64)
     f = _vec3(np.full(3, float(f)) if f.ndim == 0 else f, "factor")
+    if not np.all(np.abs(f) > 0):
+        raise ValueError(f"factor {f.tolist()}: a scale factor is zero (a singular transform)")
     T = np.eye(4)
     T[:3, :3] = np.diag(f)
     if about is not None:

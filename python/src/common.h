@@ -33,8 +33,13 @@ struct Exceptions {
 };
 Exceptions& exceptions();
 
-// Emits each message as an msdeform.MsdeformWarning (throws error_already_set when a filter turns the
-// warning into an error).
+// A library message in the Python API's words: read_mesh for load_mesh, the Deformer option for a
+// command-line option (remesh_edge_length for --remesh-base, ...), iterations for ARAP's and PriMo's
+// max_iterations.
+std::string in_python_terms(std::string message);
+
+// Emits each message (in_python_terms) as an msdeform.MsdeformWarning (throws error_already_set when a filter
+// turns the warning into an error).
 void warn(const std::vector<std::string>& messages);
 
 // str or os.PathLike -> std::string. \throw TypeError.

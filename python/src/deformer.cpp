@@ -238,6 +238,10 @@ const std::vector<Option>& options_table() {
                  if (!py::isinstance<py::str>(v) && PyCallable_Check(v.ptr())) {
                    s.propagation.transfer = msd::PropagationTransfer::Custom;
                    s.propagation.custom_transfer = PythonTransfer(v);
+                 } else if (!py::isinstance<py::str>(v)) {
+                   throw py::type_error(
+                       "option transfer must be 'linear', 'smoothstep' or a callable t(s), got " +
+                       type_name(v));
                  } else {
                    s.propagation.transfer = choice_value(v, "transfer", kTransfers);
                    s.propagation.custom_transfer = nullptr;

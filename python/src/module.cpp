@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <climits>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 
@@ -33,9 +34,33 @@ Exceptions& exceptions() {
   return e;
 }
 
+std::string in_python_terms(std::string message) {
+  // The library's messages name its C++ functions and the command line's options; Python has its own
+  // names for them (third break test: "load_mesh:" from read_mesh, "max_iterations" for iterations=0).
+  static const std::pair<const char*, const char*> kTerms[] = {
+      {"load_mesh", "read_mesh"},
+      {"load_soup", "read_soup"},
+      {"arap: max_iterations", "arap: iterations"},
+      {"primo: max_iterations", "primo: iterations"},
+      {"--remesh-base", "remesh_edge_length"},
+      {"--detail-scale", "detail_scale"},
+      {"--max-centres", "max_centres"},
+      {"--base low-pass", "base='low-pass'"},
+      {"(--cage)", "(cage=)"},
+      {"--method lattice, cage-mvc, cage-harmonic or rbf",
+       "Deformer('lattice'), 'cage-mvc', 'cage-harmonic' or 'rbf'"},
+  };
+  for (const auto& [from, to] : kTerms)
+    for (size_t at = message.find(from); at != std::string::npos;
+         at = message.find(from, at + std::strlen(to)))
+      message.replace(at, std::strlen(from), to);
+  return message;
+}
+
 void warn(const std::vector<std::string>& messages) {
   for (const std::string& message : messages)
-    if (PyErr_WarnEx(exceptions().warning, message.c_str(), 1) < 0) throw py::error_already_set();
+    if (PyErr_WarnEx(exceptions().warning, in_python_terms(message).c_str(), 1) < 0)
+      throw py::error_already_set();
 }
 
 namespace {
@@ -90,18 +115,18 @@ void register_exceptions(py::module_& m) {
     } catch (const std::bad_alloc&) {  // pybind11 says "std::bad_alloc"
       PyErr_SetString(PyExc_MemoryError, msd::out_of_memory_message("out of memory").c_str());
     } catch (const msd::InvalidInput& e) {
-      PyErr_SetString(x.invalid_input, e.what());
+      PyErr_SetString(x.invalid_input, in_python_terms(e.what()).c_str());
     } catch (const msd::TopologyError& e) {
-      PyErr_SetString(x.topology, e.what());
+      PyErr_SetString(x.topology, in_python_terms(e.what()).c_str());
     } catch (const msd::SolverError& e) {
       py::object instance =
-          py::reinterpret_borrow<py::object>(x.solver)(msd::out_of_memory_message(e.what()));
+          py::reinterpret_borrow<py::object>(x.solver)(in_python_terms(msd::out_of_memory_message(e.what())));
       instance.attr("index") = e.index() >= 0 ? py::object(py::int_(e.index())) : py::object(py::none());
       PyErr_SetObject(x.solver, instance.ptr());
     } catch (const msd::UsageError& e) {
-      PyErr_SetString(x.usage, e.what());
+      PyErr_SetString(x.usage, in_python_terms(e.what()).c_str());
     } catch (const msd::Error& e) {
-      PyErr_SetString(x.error, msd::out_of_memory_message(e.what()).c_str());
+      PyErr_SetString(x.error, in_python_terms(msd::out_of_memory_message(e.what())).c_str());
     }
   });
 }
@@ -426,15 +451,28 @@ return_report=True also the report dict. Raises FileNotFoundError, msdeform.Inva
           options.scalar_name = scalar_name;
         }
         require_writable(p);
-        py::gil_scoped_release release;
-        msd::save_mesh(P, T, p, options);
+        {
+          py::gil_scoped_release release;
+          msd::save_mesh(P, T, p, options);
+        }
+        if (msd::file_extension(p) != ".stl") return;
+        // As the command line warns of an STL output (third break test: silent in Python).
+        if (const msd::StlReadBack back = msd::stl_read_back(P, T); back.renumbered)
+          warn({"write_mesh: " + p + ": STL keeps no vertex list, so the file reads back with " +
+                std::to_string(back.vertices) + " of the " + std::to_string(P.rows()) +
+                " vertices numbered by first use in a face (" + std::to_string(back.unused) +
+                " that no face uses lost, " + std::to_string(back.merged) +
+                " at the point of another joined); labels made for V select other vertices of it. .ply, "
+                ".off and .obj keep the vertices as they are"});
       },
       py::arg("path"), py::arg("V"), py::arg("F") = py::none(), py::arg("scalar") = py::none(),
       py::arg("scalar_name") = "quality",
       R"doc(Saves V (#V, 3) and F (#F, 3) int triangles (None or empty: a point cloud) to path; the format
 comes from the extension (.off .obj .ply .stl), full double precision (STL: single). scalar: optional
 (#V,) values written as a PLY vertex property named scalar_name. The file is written to a temporary file
-and renamed: a failed save leaves an existing file untouched. The arrays are copied once.
+and renamed: a failed save leaves an existing file untouched. The arrays are copied once. STL keeps no
+vertex list: when the file would read back with other vertex numbers (unused vertices lost, vertices at
+one point joined, numbered by first use), an msdeform.MsdeformWarning says so.
 
 Raises FileNotFoundError / PermissionError when the folder is missing or not writable; ValueError for a
 wrong shape or index; msdeform.InvalidInput for an unknown extension, non-finite positions, an STL
@@ -464,7 +502,8 @@ or a code that is not a non-negative integer.)doc");
       },
       py::arg("path"), py::arg("labels"),
       R"doc(Writes labels ((N,) integer codes: 0 fixed, 1 free, 2+k handle k) as a .sel file (atomically).
-Raises TypeError / ValueError for labels that are not non-negative integers, FileNotFoundError /
+Raises TypeError / ValueError for labels that are not non-negative integers, msdeform.InvalidInput
+(ValueError) for handle codes that are not consecutive (code 3 without code 2), FileNotFoundError /
 PermissionError for a missing or read-only folder.)doc");
   m.def(
       "read_dmat_groups",

@@ -207,8 +207,17 @@ def test_unknown_method_and_options_are_refused_by_name():
         msdeform.Deformer("arap", energy="rims")
     with pytest.raises(ValueError, match="base_method must be a single-scale method"):
         msdeform.Deformer("multiscale-normal", base_method="multiscale-vectors")
-    with pytest.raises(msdeform.InvalidInput):  # the library's own check of the value
+    # The library's own check of the value, in the option's Python name (third break test: "max_iterations",
+    # and the tolerance printed as "-1.000000").
+    with pytest.raises(msdeform.InvalidInput, match=r"arap: iterations must be at least 1 \(got 0\)"):
         msdeform.Deformer("arap", iterations=0)
+    with pytest.raises(msdeform.InvalidInput, match=r"primo: iterations must be >= 1"):
+        msdeform.Deformer("primo", iterations=0)
+    with pytest.raises(msdeform.InvalidInput, match=r"tolerance must be finite and >= 0 \(got -1\)"):
+        msdeform.Deformer("arap", tolerance=-1)
+    # transfer takes a callable too, and the message says so.
+    with pytest.raises(TypeError, match="option transfer must be 'linear', 'smoothstep' or a callable t.s., got int"):
+        msdeform.Deformer("propagate", transfer=5)
     # Sizes that would exhaust memory are refused by the library, for Python as for the command line.
     with pytest.raises(msdeform.InvalidInput, match=r"Python: cells=N, --lattice-cells\) must be in 1\.\.64, got 3000"):
         msdeform.Deformer("lattice", cells=3000)

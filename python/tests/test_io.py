@@ -1,6 +1,8 @@
 """Files: meshes, soups and point clouds, .sel, .def and .dmat, edits, and the errors for missing or
 malformed files."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -50,6 +52,32 @@ def test_write_mesh_scalar_property(tmp_path, lift):
         with pytest.raises(ValueError, match="one word of visible characters other than x, y and z"):
             msdeform.write_mesh(path, lift.V, lift.F, scalar=lift.V[:, 2], scalar_name=name)
     assert path.read_bytes() == before
+    # NaN is refused as in the positions, naming the vertex (third break test: written without a word).
+    scalar = lift.V[:, 2].copy()
+    scalar[7] = np.nan
+    with pytest.raises(msdeform.InvalidInput, match="scalar is NaN or inf at vertex 7; nothing written"):
+        msdeform.write_mesh(path, lift.V, lift.F, scalar=scalar)
+    assert path.read_bytes() == before
+
+
+def test_write_mesh_warns_when_an_stl_renumbers_the_vertices(tmp_path, lift):
+    # Third break test: an unused vertex was lost without a word (the command line warns).
+    V = np.vstack([lift.V, [[9.0, 9.0, 9.0]]])
+    with pytest.warns(msdeform.MsdeformWarning, match=f"reads back with {len(lift.V)} of the {len(V)} vertices"):
+        msdeform.write_mesh(tmp_path / "a.stl", V, lift.F)
+    assert msdeform.read_mesh(tmp_path / "a.stl")[0].shape == lift.V.shape
+    # What an STL gave back is written back without a warning.
+    W, G = msdeform.read_mesh(tmp_path / "a.stl")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        msdeform.write_mesh(tmp_path / "b.stl", W, G)
+
+
+def test_write_sel_refuses_a_skipped_handle_code(tmp_path):
+    # Third break test: codes 0, 1, 3 were written, and every reader refused the file.
+    with pytest.raises(msdeform.InvalidInput, match="handle 0 .selection code 2. has no vertex"):
+        msdeform.write_sel(tmp_path / "gap.sel", np.array([0, 1, 3], np.int32))
+    assert not (tmp_path / "gap.sel").exists()
 
 
 def test_sel_round_trip(tmp_path, lift):
@@ -183,3 +211,19 @@ def test_transform_helpers_refuse_non_finite_values():
         np.testing.assert_allclose(msdeform.rotation(axis, 90), msdeform.rotation((1, 1, 0), 90), atol=1e-15)
     with pytest.raises(ValueError, match="too far out"):
         msdeform.scaling(3, about=(1e308, 0, 0))
+    # A zero factor is refused as --scale 0 is (third break test: a singular matrix, deformed with a warning).
+    with pytest.raises(ValueError, match="a scale factor is zero"):
+        msdeform.scaling((1, 0, 1))
+
+
+def test_messages_use_the_python_names(tmp_path, lift):
+    # Third break test: read_mesh's errors began "load_mesh:", and a warning advised load_mesh.
+    path = tmp_path / "cloud.ply"
+    msdeform.write_mesh(path, lift.V)
+    with pytest.raises(ValueError, match="^read_mesh: .*a point cloud is not a mesh") as info:
+        msdeform.read_mesh(path)
+    assert "load_" not in str(info.value)
+    F = lift.F.copy()
+    F[5] = F[5, ::-1]
+    with pytest.warns(msdeform.MsdeformWarning, match=r"loading the mesh with read_mesh does"):
+        msdeform.Deformer("shell").prepare(lift.V, F, lift.labels)

@@ -456,6 +456,17 @@ TEST_CASE("soups keep their vertices through save and load, STL included", "[cor
   CHECK(stl.F.row(0) == Eigen::RowVector3i(0, 1, 2));
   CHECK(stl.F.row(3) == Eigen::RowVector3i(1, 2, 5));
   CHECK(stl.P.row(5) == P.row(6));
+  const StlReadBack read_back = stl_read_back(P, F);
+  CHECK(read_back.vertices == 6);
+  CHECK(read_back.unused == 1);
+  CHECK(read_back.merged == 0);
+  CHECK(read_back.renumbered);
+  // What comes back from an STL is kept by the next; a point shared by two vertices is joined.
+  CHECK_FALSE(stl_read_back(stl.P, stl.F).renumbered);
+  Positions twin = stl.P;
+  twin.row(5) = twin.row(0);
+  CHECK(stl_read_back(twin, stl.F).merged == 1);
+  CHECK(stl_read_back(twin, stl.F).vertices == 5);
   // ASCII STL, with a repeated facet.
   std::ofstream(tmp.file("a.stl"))
       << "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"

@@ -31,6 +31,18 @@ TEST_CASE("sel, dmat and def files round-trip", "[core][region]") {
   CHECK((defs[0] - T).cwiseAbs().maxCoeff() == 0.0);
 }
 
+TEST_CASE("write_sel refuses what validate refuses: a handle code skipped", "[core][region]") {
+  // Third break test: codes 0, 1, 3 were written, and every deform then refused the file.
+  test::TempDir tmp;
+  const std::string path = tmp.file("gap.sel");
+  CHECK_THROWS_WITH(write_sel(Region::from_codes({0, 1, 3}), path),
+                    Contains("gap.sel") && Contains("handle 0 (selection code 2) has no vertex") &&
+                        Contains("nothing was written"));
+  CHECK_FALSE(std::filesystem::exists(path));
+  CHECK_THROWS_WITH(Region::from_codes({0, 1, 5}),
+                    Contains("vertex 2 has selection code 5") && Contains("3 vertices carry codes up to 4"));
+}
+
 TEST_CASE("real selections load: knight groups and CGAL's cactus benchmark", "[core][region][real]") {
   const Mesh knight = load_mesh(test::shared_data("decimated-knight.off"));
   const Region groups = read_dmat_groups(test::shared_data("decimated-knight-selection.dmat"), 502);

@@ -269,8 +269,10 @@ FileContents read_obj(std::string_view text, const std::string& path, const std:
     if (key == "v") {
       soup.points.push_back(parse_point(line, reader));
       // x y z r g b (or x y z w r g b): a vertex colour; a lone fourth number is the rational weight w.
+      // Numbers all (a word there was read without a word, third break test).
       int extra = 0;
-      while (!next_token(line).empty()) ++extra;
+      for (std::string_view tok = next_token(line); !tok.empty(); tok = next_token(line), ++extra)
+        parse_number<double>(tok, reader, "a number (a vertex colour or weight)");
       if (extra >= 2 && soup.first_attribute_line == 0) soup.first_attribute_line = reader.number();
     } else if (key == "f") {
       const long nv = static_cast<long>(soup.points.size());
@@ -356,8 +358,11 @@ class PlyReader {
             if (!indices) continue;
             if (idx != std::floor(idx) || idx < -1e15 || idx > 1e15)
               fail("face " + std::to_string(i) + " has vertex index " + number(idx) + ", not an integer");
-            // Out-of-range indices are reported with the face by triangulate (as for OFF and OBJ).
-            soup.corners.push_back(static_cast<int>(std::clamp(idx, -2147483648.0, 2147483647.0)));
+            // Beyond int, said here with the file's value (a uint 4294967295 was named as 2147483647); the
+            // rest out of range are reported with the face by triangulate (as for OFF and OBJ).
+            if (idx < -2147483648.0 || idx > 2147483647.0)
+              fail("face " + std::to_string(i) + " has vertex index " + number(idx) + ", out of range");
+            soup.corners.push_back(static_cast<int>(idx));
           }
           if (indices) {
             soup.offsets.push_back(static_cast<int>(soup.corners.size()));
@@ -659,10 +664,10 @@ class PlyReader {
     }
   }
 
-  static std::string number(double x) {
-    std::ostringstream out;
-    out << x;
-    return out.str();
+  static std::string number(double x) {  // whole numbers up to 1e15 in full (4294967295, not 4.29497e+09)
+    char text[32];
+    std::snprintf(text, sizeof text, "%.15g", x);
+    return text;
   }
 
   std::string_view text_;

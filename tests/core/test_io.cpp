@@ -785,6 +785,17 @@ TEST_CASE("OBJ and OFF: indices named as the file numbers them, malformed corner
                     Contains("line 4") && Contains("-4 reaches before the first vertex (3 vertices so far)"));
   CHECK_THROWS_WITH(load_soup(write("x.obj", v + "f 1/x 2 3\n")), Contains("line 4") && Contains("found 'x'"));
   CHECK_THROWS_WITH(load_soup(write("slash.obj", v + "f 1/ 2 3\n")), Contains("missing a texture or normal index"));
+  // Third break test: a word after a vertex's coordinates was read without a word; colours still load.
+  CHECK_THROWS_WITH(load_soup(write("word.obj", "v 0 0 0 abc\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")),
+                    Contains("line 1") && Contains("found 'abc'"));
+  CHECK(load_soup(write("colour.obj", "v 0 0 0 1 0.5 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")).P.rows() == 3);
+  // And a PLY's uint index beyond int is named as the file has it (it was named 2147483647).
+  CHECK_THROWS_WITH(load_soup(write("uint.ply",
+                                    "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                    "property float y\nproperty float z\nelement face 1\n"
+                                    "property list uchar uint vertex_indices\nend_header\n0 0 0\n"
+                                    "1 0 0\n0 1 0\n3 0 1 4294967295\n")),
+                    Contains("line 13") && Contains("vertex index 4294967295, out of range"));
   // CGAL's prim.off counts 7 faces and holds 8: read as counted (as CGAL does), and reported.
   LoadReport report;
   CHECK(load_soup(write("extra.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n"), &report).F.rows() == 1);

@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 
 #include "msdeform/core/adjacency.h"
@@ -98,6 +100,69 @@ void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::s
       std::snprintf(text, sizeof text, "%s%s%zu is %s (singular values %.3g, %.3g, %.3g%s)", who.c_str(),
                     kHandleTransformWarning, k, what, sigma(0), sigma(1), sigma(2),
                     A.determinant() < 0 ? "; it also mirrors" : "");
+    warnings.emplace_back(text);
+  }
+}
+
+std::vector<HandleSpan> handle_spans(const Positions& P, const Region& region) {
+  const int nh = region.num_handles();
+  std::vector<Vec3> centroid(nh, Vec3::Zero());
+  std::vector<int> count(nh, 0);
+  for (int v = 0; v < region.num_vertices(); ++v)
+    if (const int h = region.handle_of(v); h >= 0) centroid[h] += P.row(v).transpose(), ++count[h];
+  std::vector<Mat3> scatter(nh, Mat3::Zero());
+  for (int v = 0; v < region.num_vertices(); ++v)
+    if (const int h = region.handle_of(v); h >= 0) {
+      const Vec3 d = P.row(v).transpose() - centroid[h] / count[h];
+      scatter[h] += d * d.transpose();
+    }
+  const double diagonal = bounding_box_diagonal(P);
+  std::vector<HandleSpan> spans(nh);
+  for (int h = 0; h < nh; ++h) {
+    const Eigen::SelfAdjointEigenSolver<Mat3> eigen(scatter[h]);
+    const Vec3 extent = eigen.eigenvalues().cwiseMax(0).cwiseSqrt();  // ascending
+    const double floor = std::max(1e-6 * extent(2), 1e-9 * diagonal);
+    const int dimension = static_cast<int>((extent.array() > floor).count());
+    if (dimension == 0) spans[h].dimension = 0;
+    if (dimension == 1) spans[h] = {1, eigen.eigenvectors().col(2)};
+  }
+  return spans;
+}
+
+void handle_span_warnings(const std::vector<Mat4>& transforms, const std::vector<HandleSpan>& spans,
+                          const std::string& who, std::vector<std::string>& warnings) {
+  for (size_t k = 0; k < spans.size() && k < transforms.size(); ++k) {
+    const Mat3 A = transforms[k].topLeftCorner<3, 3>();
+    char what[160];
+    if (spans[k].dimension == 0) {
+      if (!((A - Mat3::Identity()).cwiseAbs().maxCoeff() > 1e-9)) continue;
+      const double turn = turn_degrees(A);
+      if (turn > 1e-6)
+        std::snprintf(what, sizeof what,
+                      "turns it by %.3g degrees about its one point (all its vertices are there)", turn);
+      else
+        std::snprintf(what, sizeof what, "scales it about its one point (all its vertices are there)");
+    } else if (spans[k].dimension == 1) {
+      // The twist about the line: what is left of A after the least turn that takes the line where A does.
+      const Vec3 d = spans[k].direction, image = A * d;
+      if (!(image.norm() > 0)) continue;  // singular: handle_transform_warnings says so
+      const Mat3 swing = Eigen::Quaterniond::FromTwoVectors(d, image).toRotationMatrix();
+      const Vec3 u = d.unitOrthogonal(), w = swing.transpose() * (A * u);
+      const Vec3 across = w - w.dot(d) * d;
+      const double twist = std::atan2(d.dot(u.cross(across)), u.dot(across)) * 180 / M_PI;
+      if (!(std::abs(twist) > 1)) continue;
+      std::snprintf(what, sizeof what, "twists it by %.3g degrees about the line its vertices lie on", twist);
+    } else {
+      continue;
+    }
+    char text[600];
+    std::snprintf(
+        text, sizeof text,
+        "%s%s%zu %s, which moves none of them: methods that place vertices (shell, arap, primo, "
+        "laplacian, multi-scale over them, the space methods) leave that part out, methods that "
+        "blend transforms (gradient, propagate) turn the free region with it; select a handle whose "
+        "vertices surround the point or line (a ring of them)",
+        who.c_str(), kHandleTransformWarning, k, what);
     warnings.emplace_back(text);
   }
 }
@@ -250,6 +315,7 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
   num_handles_ = region.num_handles();
   num_vertices_ = region.num_vertices();
   num_constrained_ = static_cast<int>(region.constrained_vertices().size());
+  handle_spans_ = handle_spans(P, region);
   prepared_ = true;
 }
 
@@ -291,6 +357,7 @@ void Deformer::deform(const std::vector<Mat4>& transforms, Positions& out) {
   check_affine(transforms, name());
   do_deform(transforms, out);
   handle_transform_warnings(transforms, name(), frame_report_.warnings);
+  handle_span_warnings(transforms, handle_spans_, name(), frame_report_.warnings);
   end_frame(out);
 }
 

@@ -20,12 +20,16 @@ namespace {
 constexpr DecompositionKind kKinds[] = {DecompositionKind::LowPass, DecompositionKind::Fairing,
                                         DecompositionKind::Remeshed, DecompositionKind::Subdivision};
 
-// What to change when the decomposition is refused or warned about.
-std::string remedy(const DecompositionReport& r) {
-  if (r.kind == DecompositionKind::Fairing)
-    return "fairing the free region removed the shape with the details (the free region is large or tube-like "
-           "next to the shape); use the low-pass base (--base low-pass, the default), which keeps the shape, or a "
-           "smaller free region";
+// What to change when the decomposition is refused or warned about: the base lost the shape (lost_shape), or
+// the details fold or come close to folding over it.
+std::string remedy(const DecompositionReport& r, bool lost_shape) {
+  if (r.kind == DecompositionKind::Fairing)  // (third break test: a fold warning said the shape was lost)
+    return std::string(lost_shape
+                           ? "fairing the free region removed the shape with the details (the free region "
+                             "is large or tube-like next to the shape)"
+                           : "the faired base curves tightly there for details of that height") +
+           "; use the low-pass base (--base low-pass, the default), which keeps the shape, or a smaller free "
+           "region";
   if (r.kind == DecompositionKind::Subdivision)
     return "the control mesh is too coarse for this shape; use the low-pass base (--base low-pass)";
   if (!r.low_pass.automatic) {
@@ -45,7 +49,7 @@ std::string check_decomposition(const DecompositionReport& r, const Decompositio
     char text[200];
     std::snprintf(text, sizeof text, "decompose: the base lost the shape (its area over the triangles with a free vertex is %.3g "
                   "of the input's; the details would be the shape itself): ", r.area_ratio);
-    throw TopologyError(text + remedy(r));
+    throw TopologyError(text + remedy(r, true));
   }
   const DetailCheck& c = r.check;
   const bool folds = c.folding_vertices > 0, tall = c.fold_ratio_p999 > o.low_pass.max_fold_ratio;
@@ -57,11 +61,13 @@ std::string check_decomposition(const DecompositionReport& r, const Decompositio
       std::to_string(c.folding_vertices) + (c.folding_vertices == 1 ? " vertex" : " vertices");
   if (c.folding_vertices > static_cast<long>(1e-3 * static_cast<double>(num_vertices)))
     throw TopologyError("decompose: the details fold over at rest (" + vertices +
-                        " with a height above the base's curvature radius; " + where + "): " + remedy(r));
+                        " with a height above the base's curvature radius; " + where +
+                        "): " + remedy(r, false));
   if (folds)
-    return "decompose: the details of " + vertices + " fold over at rest (" + where + "): " + remedy(r);
+    return "decompose: the details of " + vertices + " fold over at rest (" + where +
+           "): " + remedy(r, false);
   return std::string("decompose: the details come close to folding over the base (") + where +
-         "); an edit that bends the base further may fold them: " + remedy(r);
+         "); an edit that bends the base further may fold them: " + remedy(r, false);
 }
 
 // Empty, or a warning naming a connected piece of S whose base lost its shape (area below half of the

@@ -172,6 +172,9 @@ void MultiscaleDeformer::do_deform(const std::vector<Mat4>& transforms, Position
         (d.hierarchy ? "a finer control mesh or the low-pass base keeps them apart"
          : options_.decomposition.kind == DecompositionKind::Remeshed
              ? "another --remesh-base or a smaller detail scale keeps them apart"
+         // A faired base has no detail scale (third break test): its free region sets the details.
+         : options_.decomposition.kind == DecompositionKind::Fairing
+             ? "the low-pass base (--base low-pass) or a smaller free region keeps them apart"
              : "a smaller detail scale keeps them apart (the other encodings fold more or less "
                "depending on the edit: msdeform compare measures them)"));
 }

@@ -141,6 +141,11 @@ grep -q "warning: the result intersects itself: .* msdeform render twisted.off -
 "$msdeform" deform --scene bar-twist135 --resolution 2k --method shell --no-self-intersections -o twisted.off \
   >out.txt 2>err.txt || fail "shell twist without the count"
 grep -q "self-intersections" out.txt err.txt && { cat out.txt err.txt; fail "--no-self-intersections counted"; }
+# A result too large to count is warned about on stderr with the other checks (third break test: only a
+# line on stdout said so).
+"$msdeform" deform --scene lift --resolution 600k --method shell -o large.ply >out.txt 2>err.txt || fail "600k lift"
+grep -q "warning: the result was not checked for self-intersections (1[0-9]* faces, over 1000000)" err.txt ||
+  { cat out.txt err.txt; fail "an uncounted result was not warned about"; }
 # With no free vertex the shape line spoke of "100 % of the free region's edges", and the warning blamed
 # large rotations rather than the missing free region (which the prepare warning names).
 "$msdeform" scene lift --resolution 2k -o nofree >/dev/null

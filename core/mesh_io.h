@@ -85,10 +85,10 @@ struct StlReadBack {
   int vertices = 0;  //!< vertices of the file read back
   int unused = 0;    //!< vertices no face uses, lost
   int merged = 0;    //!< used vertices at the point of a lower-numbered one, joined with it
-  bool renumbered =
-      false;  //!< the read-back numbering differs from P's (so a selection for P no longer applies)
+  //! The read-back numbering differs from P's (so a selection made for P no longer applies).
+  bool renumbered = false;
 };
-//! 	hrow InvalidInput for an index of F outside [0, #V).
+//! \throw InvalidInput for an index of F outside [0, #V).
 StlReadBack stl_read_back(const Positions& P, const Faces& F);
 
 //! The values of a PLY file's per-vertex property `name` (#V, in the file's vertex order), e.g. the

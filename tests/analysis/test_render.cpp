@@ -555,8 +555,8 @@ TEST_CASE("view axes: a sphere's or a cube's view does not depend on its size or
   for (const Positions* shape : std::initializer_list<const Positions*>{&sphere, &turned_cube, &cylinder}) {
     const ViewAxes home = view_axes(*shape);
     for (const double scale : {1e-3, 0.7, 3.0, 1e5})
-      for (const Vec3 offset : {Vec3(0, 0, 0), Vec3(7.624, 7.624, 7.624), Vec3(1e6, 1e6, 1e6),
-                                Vec3(55.5, 0, 0), Vec3(1023.013, -55.1, 3.3)}) {
+      for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(7.624, 7.624, 7.624), Vec3(1e6, 1e6, 1e6),
+                                 Vec3(55.5, 0, 0), Vec3(1023.013, -55.1, 3.3)}) {
         INFO(shape->rows() << " vertices, scale " << scale << ", offset " << offset.transpose());
         const ViewAxes there = view_axes((scale * *shape).rowwise() + scale * offset.transpose());
         CHECK(there.up == home.up);

@@ -70,7 +70,7 @@ TEST_CASE("remesh_isotropic: open flat square keeps its outline and area", "[dec
     for (int v : input_border) found = found || (r.P.row(w) - s.smooth.row(v)).norm() <= 1e-14;
     REQUIRE(found);
   }
-  for (const Vec3 corner : {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0)}) {
+  for (const Vec3& corner : {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0)}) {
     bool found = false;
     for (int w : border) found = found || (Vec3(r.P.row(w)) - corner).norm() <= 1e-14;
     CHECK(found);

@@ -96,8 +96,19 @@ AddedSelfIntersections::AddedSelfIntersections(const Positions& rest, const Face
         "vertex has thousands of neighbours, or skip the count");
   std::vector<std::pair<int, int>> pairs;
   rest_pairs_ = count_self_intersections(rest, F, &pairs);
-  touching_at_rest_.assign(static_cast<size_t>(F.rows()), 0);
-  for (const auto& [f, g] : pairs) touching_at_rest_[f] = touching_at_rest_[g] = 1;
+  // The faces of a contact at rest and those within two rings of them (sharing a vertex, twice), where the
+  // contact slides under an edit.
+  near_contact_.assign(static_cast<size_t>(F.rows()), 0);
+  for (const auto& [f, g] : pairs) near_contact_[f] = near_contact_[g] = 1;
+  std::vector<char> vertex(static_cast<size_t>(rest.rows()));
+  for (int ring = 0; ring < 2 && !pairs.empty(); ++ring) {
+    std::fill(vertex.begin(), vertex.end(), 0);
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      if (near_contact_[f])
+        for (int k = 0; k < 3; ++k) vertex[F(f, k)] = 1;
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      near_contact_[f] = near_contact_[f] || vertex[F(f, 0)] || vertex[F(f, 1)] || vertex[F(f, 2)];
+  }
 }
 
 int AddedSelfIntersections::count(const Positions& result, std::vector<int>* faces) const {
@@ -106,7 +117,7 @@ int AddedSelfIntersections::count(const Positions& result, std::vector<int>* fac
   int added = 0;
   if (faces) faces->clear();
   for (const auto& [f, g] : pairs) {
-    if (touching_at_rest_[f] || touching_at_rest_[g]) continue;
+    if (near_contact_[f] && near_contact_[g]) continue;
     ++added;
     if (faces) faces->push_back(f), faces->push_back(g);
   }

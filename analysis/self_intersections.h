@@ -27,8 +27,10 @@ int count_self_intersections(const Positions& P, const Faces& F,
                              int* degenerate_faces = nullptr);
 
 //! The self-intersecting pairs an edit adds to a rest shape that may intersect itself already (a scan's
-//! arm along its torso): a result's pair counts unless one of its faces is in a pair at rest (such contacts
-//! slide). The constructor counts the rest's pairs once; each count() is one CGAL run.
+//! arm along its torso): a result's pair counts unless both its faces are in a pair at rest or within two
+//! rings of one (such contacts slide). A face of a contact at rest pushed through another part counts
+//! (third break test: any pair with a face of a rest contact was left out). The constructor counts the
+//! rest's pairs once; each count() is one CGAL run.
 class AddedSelfIntersections {
  public:
   //! rest: #V×3, F: #F×3. \throw InvalidInput as count_self_intersections, and for a vertex on more than
@@ -43,7 +45,7 @@ class AddedSelfIntersections {
  private:
   Faces F_;
   int rest_pairs_ = 0;
-  std::vector<char> touching_at_rest_;  // per face: in a pair at rest
+  std::vector<char> near_contact_;  // per face: in a pair at rest, or within two rings of one
 };
 
 }  // namespace msd

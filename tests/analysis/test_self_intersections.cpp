@@ -48,6 +48,39 @@ TEST_CASE("self intersections: a vertex pushed through the opposite side", "[ana
   CHECK(count_self_intersections(P, F) == count);
 }
 
+TEST_CASE("self intersections: an edit's new pairs count beside a contact at rest, its sliding does not",
+          "[analysis][self_intersections]") {
+  // Two unit spheres overlapping at rest (A at the origin, B at x = 1.98: its surface cuts the faces around
+  // A's tip) and a third, C, at x = -3.
+  Positions S;
+  Faces G;
+  test::icosphere(2, S, G);
+  const Eigen::Index n = S.rows(), m = G.rows();
+  Positions P(3 * n, 3);
+  Faces F(3 * m, 3);
+  for (int piece = 0; piece < 3; ++piece) {
+    P.middleRows(piece * n, n) = S.rowwise() + Eigen::RowVector3d(piece == 0   ? 0
+                                                                  : piece == 1 ? 1.98
+                                                                               : -3,
+                                                                  0, 0);
+    F.middleRows(piece * m, m) = G.array() + static_cast<int>(piece * n);
+  }
+  const AddedSelfIntersections added(P, F);
+  REQUIRE(added.rest_pairs() > 0);
+  // B slid a little along A: its contact moves to neighbouring faces, which is no new intersection.
+  Positions slid = P;
+  slid.middleRows(n, n).col(1).array() += 0.05;
+  CHECK(added.count(slid) == 0);
+  // A's vertex inside B (in the contact at rest) pushed through A and into C: new pairs, all with a face of
+  // the contact at rest (the third break test: such pairs were all left out, 0 counted).
+  Eigen::Index tip = 0;
+  P.topRows(n).col(0).maxCoeff(&tip);
+  Positions pushed = P;
+  pushed(tip, 0) = -3.5;
+  std::vector<int> faces;
+  CHECK(added.count(pushed, &faces) > 0);
+}
+
 TEST_CASE("self intersections: degenerate faces are counted, not crashed on",
           "[analysis][self_intersections]") {
   Positions S;

@@ -104,65 +104,83 @@ void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::s
   }
 }
 
-std::vector<HandleSpan> handle_spans(const Positions& P, const Region& region) {
+std::vector<Mat3> handle_scatters(const Positions& P, const Region& region) {
   const int nh = region.num_handles();
   std::vector<Vec3> centroid(nh, Vec3::Zero());
   std::vector<int> count(nh, 0);
   for (int v = 0; v < region.num_vertices(); ++v)
     if (const int h = region.handle_of(v); h >= 0) centroid[h] += P.row(v).transpose(), ++count[h];
+  for (int h = 0; h < nh; ++h) centroid[h] /= std::max(count[h], 1);
   std::vector<Mat3> scatter(nh, Mat3::Zero());
   for (int v = 0; v < region.num_vertices(); ++v)
     if (const int h = region.handle_of(v); h >= 0) {
-      const Vec3 d = P.row(v).transpose() - centroid[h] / count[h];
-      scatter[h] += d * d.transpose();
+      const Vec3 d = P.row(v).transpose() - centroid[h];
+      scatter[h] += d * d.transpose() / count[h];
     }
-  const double diagonal = bounding_box_diagonal(P);
-  std::vector<HandleSpan> spans(nh);
-  for (int h = 0; h < nh; ++h) {
-    const Eigen::SelfAdjointEigenSolver<Mat3> eigen(scatter[h]);
-    const Vec3 extent = eigen.eigenvalues().cwiseMax(0).cwiseSqrt();  // ascending
-    const double floor = std::max(1e-6 * extent(2), 1e-9 * diagonal);
-    const int dimension = static_cast<int>((extent.array() > floor).count());
-    if (dimension == 0) spans[h].dimension = 0;
-    if (dimension == 1) spans[h] = {1, eigen.eigenvectors().col(2)};
-  }
-  return spans;
+  const double point = 1e-9 * bounding_box_diagonal(P);
+  for (Mat3& C : scatter)
+    if (!(C.trace() > point * point)) C.setZero();
+  return scatter;
 }
 
-void handle_span_warnings(const std::vector<Mat4>& transforms, const std::vector<HandleSpan>& spans,
+void handle_span_warnings(const std::vector<Mat4>& transforms, const std::vector<Mat3>& scatters,
                           const std::string& who, std::vector<std::string>& warnings) {
-  for (size_t k = 0; k < spans.size() && k < transforms.size(); ++k) {
-    const Mat3 A = transforms[k].topLeftCorner<3, 3>();
-    char what[160];
-    if (spans[k].dimension == 0) {
-      if (!((A - Mat3::Identity()).cwiseAbs().maxCoeff() > 1e-9)) continue;
-      const double turn = turn_degrees(A);
-      if (turn > 1e-6)
-        std::snprintf(what, sizeof what,
-                      "turns it by %.3g degrees about its one point (all its vertices are there)", turn);
-      else
-        std::snprintf(what, sizeof what, "scales it about its one point (all its vertices are there)");
-    } else if (spans[k].dimension == 1) {
-      // The twist about the line: what is left of A after the least turn that takes the line where A does.
-      const Vec3 d = spans[k].direction, image = A * d;
-      if (!(image.norm() > 0)) continue;  // singular: handle_transform_warnings says so
-      const Mat3 swing = Eigen::Quaterniond::FromTwoVectors(d, image).toRotationMatrix();
-      const Vec3 u = d.unitOrthogonal(), w = swing.transpose() * (A * u);
-      const Vec3 across = w - w.dot(d) * d;
-      const double twist = std::atan2(d.dot(u.cross(across)), u.dot(across)) * 180 / M_PI;
-      if (!(std::abs(twist) > 1)) continue;
-      std::snprintf(what, sizeof what, "twists it by %.3g degrees about the line its vertices lie on", twist);
-    } else {
-      continue;
+  for (size_t k = 0; k < scatters.size() && k < transforms.size(); ++k) {
+    const Mat3 A = transforms[k].topLeftCorner<3, 3>(), &C = scatters[k];
+    const Vec3 sigma = Eigen::JacobiSVD<Mat3>(A).singularValues();
+    // Mirrors, flattening and half turns: handle_transform_warnings says what they do.
+    if (!(A.determinant() > 0) || !(sigma(2) > 1e-6 * sigma(0)) || turn_degrees(A) > 179.9) continue;
+    const double size = C.trace();  // the mean squared distance of the vertices from their centroid
+    Mat3 R = Mat3::Identity();
+    double s = 1;
+    if (size > 0) {
+      const Eigen::JacobiSVD<Mat3> fit(A * C + 1e-4 * size * Mat3::Identity(),
+                                       Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Mat3 D = Mat3::Identity();
+      D(2, 2) = (fit.matrixU() * fit.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+      R = fit.matrixU() * D * fit.matrixV().transpose();
+      s = (R.transpose() * A * C).trace() / size;
+      if (!(s > 0)) s = 1;
     }
-    char text[600];
+    const Mat3 L = A - s * R;
+    const double lost = L.norm() / std::sqrt(3.0);  // RMS change of a unit length over directions
+    if (!(lost > 0.02)) continue;
+    // How much of that moves the vertices: against a handle as large in every direction.
+    const double shown =
+        size > 0 ? std::sqrt(std::max(0.0, (L * C * L.transpose()).trace()) / (L.squaredNorm() * size / 3))
+                 : 0;
+    if (!(shown < 0.1)) continue;
+    const Vec3 extent =
+        Eigen::SelfAdjointEigenSolver<Mat3>(C).eigenvalues().cwiseMax(0).cwiseSqrt();  // ascending
+    const int spans = size > 0 ? static_cast<int>((extent.array() > 0.1 * extent(2)).count()) : 0;
+    const char* where = spans == 0   ? "they all lie at one point"
+                        : spans == 1 ? "they lie near a line"
+                        : spans == 2 ? "they lie near a plane"
+                                     : "they lie near a line or plane";
+    // What the vertices leave out, R^T A / s: a turn where it is one (equal singular values), else a scale or
+    // shear.
+    const Mat3 left_out = R.transpose() * A / s;
+    const Vec3 stretch = Eigen::JacobiSVD<Mat3>(left_out).singularValues();
+    const double turn = stretch(0) < 1.02 * stretch(2) ? turn_degrees(left_out) : 0;
+    char change[200];
+    if (turn > 1)
+      std::snprintf(change, sizeof change, "a turn of %.3g degrees", turn);
+    else
+      std::snprintf(change, sizeof change, "a scale or shear (lengths change by up to %.3g %%)",
+                    100 * Eigen::JacobiSVD<Mat3>(L).singularValues()(0));
+    char moves[120] = "moves none of them";
+    if (shown > 1e-3)
+      std::snprintf(moves, sizeof moves,
+                    "moves them by %.2g %% of what it would move a handle spread in every direction",
+                    100 * shown);
+    char text[800];
     std::snprintf(
         text, sizeof text,
-        "%s%s%zu %s, which moves none of them: methods that place vertices (shell, arap, primo, "
-        "laplacian, multi-scale over them, the space methods) leave that part out, methods that "
-        "blend transforms (gradient, propagate) turn the free region with it; select a handle whose "
-        "vertices surround the point or line (a ring of them)",
-        who.c_str(), kHandleTransformWarning, k, what);
+        "%s%s%zu changes it where its vertices do not spread (%s): %s that %s. Methods that place "
+        "vertices (shell, arap, primo, laplacian, multi-scale over them, the space methods) leave that "
+        "part out, methods that blend transforms (gradient, propagate) apply it to the free region; "
+        "select a handle whose vertices spread around that point, line or plane",
+        who.c_str(), kHandleTransformWarning, k, where, change, moves);
     warnings.emplace_back(text);
   }
 }
@@ -315,7 +333,7 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
   num_handles_ = region.num_handles();
   num_vertices_ = region.num_vertices();
   num_constrained_ = static_cast<int>(region.constrained_vertices().size());
-  handle_spans_ = handle_spans(P, region);
+  handle_scatters_ = handle_scatters(P, region);
   prepared_ = true;
 }
 
@@ -357,7 +375,7 @@ void Deformer::deform(const std::vector<Mat4>& transforms, Positions& out) {
   check_affine(transforms, name());
   do_deform(transforms, out);
   handle_transform_warnings(transforms, name(), frame_report_.warnings);
-  handle_span_warnings(transforms, handle_spans_, name(), frame_report_.warnings);
+  handle_span_warnings(transforms, handle_scatters_, name(), frame_report_.warnings);
   end_frame(out);
 }
 

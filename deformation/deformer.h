@@ -51,13 +51,6 @@ struct DeformerTraits {
   bool cotan_laplacian = true;
 };
 
-//! How many dimensions a handle's vertices span at rest: 0 (one vertex, or all at one point), 1 (on a line
-//! along `direction`), 3 otherwise (2, a flat handle, is counted as 3: its vertices fix a rotation).
-struct HandleSpan {
-  int dimension = 3;
-  Vec3 direction = Vec3::Zero();  //!< the line's unit direction where dimension is 1
-};
-
 //! What the last frame measured about its own result: a frame never returns a result that was not
 //! checked. Fields a method does not measure keep their defaults.
 struct FrameReport {
@@ -184,7 +177,7 @@ class Deformer {
   bool prepare_failed_ = false;         // the last prepare() threw (a frame's error says so)
   bool output_checked_finite_ = false;  // set_output_checked_finite() in this frame
   int num_handles_ = 0, num_vertices_ = 0, num_constrained_ = 0;
-  std::vector<HandleSpan> handle_spans_;  // of the prepared region, for handle_span_warnings
+  std::vector<Mat3> handle_scatters_;  // of the prepared region, for handle_span_warnings
 };
 
 //! A deformer whose solver works in the shape's centred, normalised frame (LocalFrame), for methods whose
@@ -232,16 +225,22 @@ constexpr const char* kHandleTransformWarning = ": the transform of handle ";
 void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::string& who,
                                std::vector<std::string>& warnings);
 
-//! One HandleSpan per handle of region (validated against P, #V×3): a singular value of the handle's centred
-//! vertices below 1e-6 of its largest, or all of them below 1e-9 of P's bounding-box diagonal, is no extent.
-std::vector<HandleSpan> handle_spans(const Positions& P, const Region& region);
-//! Appends a warning for each handle whose transform turns or scales it in a way its vertices cannot show
-//! (third break test: a one-vertex handle turned 170° left shell and ARAP's result at rest without a word,
-//! while gradient editing turned the whole free region): a non-identity 3×3 part on a handle of dimension
-//! 0, a twist of more than 1° about the line of a handle of dimension 1. Methods that place vertices
-//! (shell, ARAP, Laplacian, multi-scale) see only the vertices' targets; methods that blend the transform
-//! (gradient, propagate) apply all of it. Allocates only for a warning.
-void handle_span_warnings(const std::vector<Mat4>& transforms, const std::vector<HandleSpan>& spans,
+//! Per handle of region (validated against P, #V×3), the second moments of its vertices about their
+//! centroid (3×3: the mean of (p − c)(p − c)ᵀ), zero for a handle whose vertices all lie within 1e-9 of P's
+//! bounding-box diagonal of one point: what handle_span_warnings compares a transform with.
+std::vector<Mat3> handle_scatters(const Positions& P, const Region& region);
+//! Appends a warning for each handle whose transform changes it in directions its vertices do not (or
+//! hardly) span, so that the change hardly moves them (third and fourth break tests: a one-vertex handle
+//! turned 170°, a cap scaled along its normal, a row of vertices twisted about itself left shell's and
+//! ARAP's result at rest without a word, while gradient editing and propagation deformed the free region).
+//! The part the vertices show is the similarity s·R fitted to the handle's moved vertices (Procrustes,
+//! regularised towards the least turn where they do not fix it); the rest, L = A − s·R (A the transform's
+//! 3×3 part), is warned of when it changes lengths by over 2 % (RMS over directions) and moves the vertices
+//! by under a tenth of what it would move a handle as large in every direction. Methods that place vertices
+//! see only the vertices' targets; methods that blend the transform (gradient, propagate) apply all of it.
+//! Reflections, singular transforms and half turns are left to handle_transform_warnings. O(1) per handle;
+//! allocates only for a warning.
+void handle_span_warnings(const std::vector<Mat4>& transforms, const std::vector<Mat3>& scatters,
                           const std::string& who, std::vector<std::string>& warnings);
 
 //! Throws InvalidInput unless every transform is finite with last row (0 0 0 1); `who` prefixes the message.

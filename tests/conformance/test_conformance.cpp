@@ -405,10 +405,11 @@ TEST_CASE("conformance: every method warns once about a singular, reflecting or 
   });
 }
 
-TEST_CASE("conformance: every method warns of a handle turned where its vertices cannot show it",
+TEST_CASE("conformance: every method warns of a handle changed where its vertices do not spread",
           "[conformance]") {
-  // Third break test: a one-vertex handle turned 170° left shell and ARAP's result at rest without a word,
-  // while gradient editing turned the whole free region with it.
+  // Third and fourth break tests: a one-vertex handle turned 170°, a flat cap scaled along its normal, a row
+  // of vertices twisted about itself left shell's and ARAP's result at rest without a word, while gradient
+  // editing and propagation deformed the free region with the transform.
   const Scene& s = test::bent_bar();
   const std::vector<int> handle = s.region.handle_vertices(0);
   const int a = handle.front();
@@ -417,6 +418,15 @@ TEST_CASE("conformance: every method warns of a handle turned where its vertices
     for (int k = 0; k < 3; ++k)
       if (s.F(f, k) == a && s.region.handle_of(s.F(f, (k + 1) % 3)) == 0) b = s.F(f, (k + 1) % 3);
   REQUIRE(b >= 0);
+  // The handle's outermost ring along the bar's length: a flat one.
+  Eigen::Index length_axis = 0;
+  (s.P.colwise().maxCoeff() - s.P.colwise().minCoeff()).maxCoeff(&length_axis);
+  double end = -1e300;
+  for (int v : handle) end = std::max(end, s.P(v, length_axis));
+  std::vector<int> cap;
+  for (int v : handle)
+    if (s.P(v, length_axis) > end - 1e-9) cap.push_back(v);
+  REQUIRE(cap.size() >= 4);
   const Vec3 pa = s.P.row(a), line = (s.P.row(b) - s.P.row(a)).normalized();
   const auto turn_about = [](const Vec3& axis, double degrees, const Vec3& point) {
     Mat4 T = Mat4::Identity();
@@ -424,20 +434,31 @@ TEST_CASE("conformance: every method warns of a handle turned where its vertices
     T.topRightCorner<3, 1>() = point - T.topLeftCorner<3, 3>() * point;
     return T;
   };
-  Mat4 lift = Mat4::Identity();
+  Mat4 lift = Mat4::Identity(), stretch_length = Mat4::Identity(), shear = Mat4::Identity();
   lift(2, 3) = 0.3;
+  stretch_length(length_axis, length_axis) = 3;
+  shear((length_axis + 1) % 3, (length_axis + 2) % 3) = 0.5;
   struct Case {
     std::vector<int> vertices;
     Mat4 T;
     const char* said;
   };
   const std::vector<Case> cases = {
-      {{a}, turn_about(Vec3(0, 1, 0), 170, pa), "turns it by 170 degrees about its one point"},
-      {{a}, Mat4(Eigen::Vector4d(2, 2, 2, 1).asDiagonal()), "scales it about its one point"},
+      {{a},
+       turn_about(Vec3(0, 1, 0), 170, pa),
+       "(they all lie at one point): a turn of 170 degrees that moves none of them"},
+      {{a}, Mat4(Eigen::Vector4d(2, 2, 2, 1).asDiagonal()), "(they all lie at one point): a scale or shear"},
       {{a}, lift, nullptr},
-      {{a, b}, turn_about(line, 40, pa), "twists it by 40 degrees about the line its vertices lie on"},
+      {{a, b},
+       turn_about(line, 40, pa),
+       "(they lie near a line): a turn of 40 degrees that moves none of them"},
       {{a, b}, turn_about(line.unitOrthogonal(), 40, pa), nullptr},  // the line turns: its vertices show it
-      {handle, turn_about(Vec3(0, 1, 0), 60, pa), nullptr}};
+      {cap, stretch_length, "(they lie near a plane): a scale or shear (lengths change by up to 200 %)"},
+      {cap, shear, nullptr},  // a shear within the cap's plane moves its vertices
+      {cap, turn_about(Vec3::Unit(length_axis).unitOrthogonal(), 60, pa),
+       nullptr},  // a flat handle shows turns
+      {handle, turn_about(Vec3(0, 1, 0), 60, pa), nullptr},
+      {handle, stretch_length, nullptr}};
   for_every_method([&](Deformer& d) {
     if (d.name() == "primo") return;  // minutes per frame; its frames go through the same Deformer::deform
     for (const Case& c : cases) {
@@ -449,13 +470,14 @@ TEST_CASE("conformance: every method warns of a handle turned where its vertices
       d.deform({c.T});
       std::vector<std::string> about;
       for (const std::string& w : d.frame_report().warnings)
-        if (w.find("which moves none of them") != std::string::npos) about.push_back(w);
+        if (w.find("where its vertices do not spread") != std::string::npos) about.push_back(w);
       if (!c.said) {
         CHECK(about.empty());
         continue;
       }
       REQUIRE(about.size() == 1);
-      CHECK_THAT(about[0], StartsWith(d.name() + ": the transform of handle 0 ") && Contains(c.said));
+      CHECK_THAT(about[0],
+                 StartsWith(d.name() + ": the transform of handle 0 changes it") && Contains(c.said));
     }
   });
 }

@@ -175,6 +175,11 @@ DetailDistortionMetric::DetailDistortionMetric(const Positions& rest, const Face
   free_ = region.free_vertices();
   if (free_.empty())
     throw InvalidInput(std::string(who) + ": the region has no free vertex to measure details on");
+  // (Fourth break test: said by the fairing underneath, in its own words.)
+  if (free_.size() == static_cast<size_t>(region.num_vertices()))
+    throw InvalidInput(std::string(who) + ": the region has no fixed or handle vertex (all " +
+                       std::to_string(free_.size()) +
+                       " are free); the details are measured over the free region faired between those");
   // Its fairing works within msdeform's sizes (at 1e100 it failed: "no incident face of non-zero area").
   const Positions R = centred(rest);
   check_extent(R, who);

@@ -258,7 +258,7 @@ void check_options(const RenderOptions& o, const Positions& P, const Faces& F) {
   if (!o.sphere_center.allFinite() || !std::isfinite(o.sphere_radius) || o.sphere_radius < 0)
     fail("sphere_center must be finite and sphere_radius finite and non-negative");
   if (!std::isfinite(o.point_radius) || o.point_radius < 0)
-    fail("point_radius = " + std::to_string(o.point_radius) +
+    fail("point_radius = " + format_number(o.point_radius) +
          " must be finite and non-negative (0: automatic)");
   if (o.highlighted_faces)
     for (int f : *o.highlighted_faces)

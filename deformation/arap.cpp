@@ -44,9 +44,10 @@ void ArapDeformer::set_max_iterations(int max_iterations) {
 
 ArapDeformer::ArapDeformer(ArapOptions options) : options_(options) {
   set_max_iterations(options_.max_iterations);
-  if (!(options_.tolerance >= 0) || !std::isfinite(options_.tolerance))
-    throw InvalidInput("arap: tolerance must be finite and >= 0 (got " + format_number(options_.tolerance) +
-                       ")");
+  if (!(options_.tolerance >= 0 &&
+        options_.tolerance <= 1))  // as --tolerance (above 1: one iteration, "converged")
+    throw InvalidInput("arap: tolerance must lie in [0, 1], a fraction of the bounding-box diagonal (got " +
+                       format_number(options_.tolerance) + ")");
   if (options_.anderson < 0 || options_.anderson > 8)
     throw InvalidInput("arap: anderson must lie in [0, 8] (got " + std::to_string(options_.anderson) + ")");
   if (!(options_.min_weight_ratio > 0 && options_.min_weight_ratio <= 1))

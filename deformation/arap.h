@@ -30,7 +30,7 @@ struct ArapOptions {
   //! Iterations (one local plus one global step each) per frame at most; >= 1.
   int max_iterations = 1000;
   //! The frame stops when one iteration moves no vertex by more than tolerance × the rest shape's
-  //! bounding-box diagonal (>= 0). 0: run exactly max_iterations iterations. A displacement test, not a
+  //! bounding-box diagonal (in [0, 1]). 0: run exactly max_iterations iterations. A displacement test, not a
   //! relative energy change: on the bent bar (2.5k vertices, plain local/global) the energy changed by
   //! 1.8e-9 per iteration while the shape was still 1.1e-4 diagonals from its converged state.
   double tolerance = 1e-6;
@@ -73,7 +73,7 @@ struct ArapOptions {
 //! rotation, so the energy measured at the local steps never increases.
 class ArapDeformer : public Deformer {
  public:
-  //! \throw InvalidInput for max_iterations < 1, a negative or non-finite tolerance, anderson outside
+  //! \throw InvalidInput for max_iterations < 1, a tolerance outside [0, 1], anderson outside
   //! [0, 8], or min_weight_ratio not in (0, 1].
   explicit ArapDeformer(ArapOptions options = {});
   const std::string& name() const override { return name_; }

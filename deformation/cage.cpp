@@ -600,7 +600,7 @@ void kdop_cage_near_origin(const Positions& P, double margin, int subdivisions, 
   if (P.rows() == 0) throw InvalidInput(std::string(who) + ": no points to enclose");
   check_finite(P, who, "the points");
   if (!(margin > 0 && margin <= 10))
-    throw InvalidInput(std::string(who) + ": margin must be in (0, 10] (got " + std::to_string(margin) + ")");
+    throw InvalidInput(std::string(who) + ": margin must be in (0, 10] (got " + format_number(margin) + ")");
   if (subdivisions < 0 || subdivisions > 4)
     throw InvalidInput(std::string(who) + ": subdivisions must be in 0..4 (got " +
                        std::to_string(subdivisions) + ")");
@@ -747,7 +747,7 @@ CageDeformer::CageDeformer(CageOptions options) : options_(std::move(options)) {
   name_ = options_.coordinates == CageCoordinates::MeanValue ? "cage-mvc" : "cage-harmonic";
   if (!(options_.margin > 0 && options_.margin <= 10))
     throw InvalidInput(std::string(who) + ": margin must be in (0, 10] (got " +
-                       std::to_string(options_.margin) + ")");
+                       format_number(options_.margin) + ")");
   if (options_.subdivisions < 0 || options_.subdivisions > 4)
     throw InvalidInput(std::string(who) + ": subdivisions must be in 0..4 (got " +
                        std::to_string(options_.subdivisions) + ")");

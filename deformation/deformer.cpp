@@ -364,7 +364,7 @@ void Deformer::end_frame(const Positions& out) {
     frame_report_.warnings.push_back(
         name() + kNotConvergedWarning + std::to_string(frame_report_.iterations) +
         " iterations with relative residual " + format_number(frame_report_.residual) +
-        "; raise the iteration limit, or loosen the tolerance where the method has one (ARAP, PriMo)");
+        "; raise its iteration limit, or loosen its tolerance");
 }
 
 void Deformer::deform(const std::vector<Mat4>& transforms, Positions& out) {

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 
 namespace msd {
 
@@ -22,7 +23,7 @@ LatticeDeformer::LatticeDeformer(LatticeOptions options) : options_(options) {
         count(LatticeOptions::kMaxCells) + ", got " + count(options_.cells_longest));
   if (!(options_.margin >= 0 && options_.margin <= LatticeOptions::kMaxMargin))
     throw InvalidInput("lattice: the margin must be in 0..10 (relative to the bounding-box diagonal), got " +
-                       std::to_string(options_.margin));
+                       format_number(options_.margin));
 }
 
 void LatticeDeformer::fit_basis(const Positions& P, const Region&) {

@@ -47,11 +47,13 @@ void PrimoDeformer::set_max_iterations(int max_iterations) {
 
 PrimoDeformer::PrimoDeformer(PrimoOptions options) : options_(options) {
   if (!std::isfinite(options_.thickness) || !(options_.thickness > 0))
-    throw InvalidInput("primo: the thickness must be finite and > 0 (got " + std::to_string(options_.thickness) + ")");
+    throw InvalidInput("primo: the thickness must be finite and > 0 (got " +
+                       format_number(options_.thickness) + ")");
   set_max_iterations(options_.max_iterations);
-  if (!std::isfinite(options_.tolerance) || options_.tolerance < 0)
-    throw InvalidInput("primo: the tolerance must be finite and >= 0 (got " +
-                       format_number(options_.tolerance) + ")");
+  if (!(options_.tolerance >= 0 && options_.tolerance <= 1))  // as --tolerance (above 1: one iteration)
+    throw InvalidInput(
+        "primo: the tolerance must lie in [0, 1], a fraction of the bounding-box diagonal (got " +
+        format_number(options_.tolerance) + ")");
 }
 
 DeformerTraits PrimoDeformer::traits() const {

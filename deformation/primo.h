@@ -23,7 +23,7 @@ struct PrimoOptions {
   //! Iteration cap per frame (>= 1).
   int max_iterations = 500;
   //! A frame stops once an iteration moves no prism corner (a prism's copy of one of its face's
-  //! vertices) by more than tolerance × the rest mesh's bounding-box diagonal (>= 0), or when no damped
+  //! vertices) by more than tolerance × the rest mesh's bounding-box diagonal (in [0, 1]), or when no damped
   //! step lowers the energy any more. 0 runs exactly max_iterations iterations. A displacement test
   //! like ARAP's: the relative energy change is round-off near a rigid motion, where E → 0.
   double tolerance = 1e-6;

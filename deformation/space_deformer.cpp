@@ -9,6 +9,7 @@
 
 #include "msdeform/core/checks.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/mesh.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/core/solver.h"
@@ -53,7 +54,7 @@ void SpaceDeformer::prepare_solve(const Positions& P, const std::vector<int>& co
   const LeastNormOptions options = least_norm_options();
   if (!(options.regularization > 0) || !std::isfinite(options.regularization))
     throw InvalidInput(name() + ": the least-norm regularisation must be positive and finite (got " +
-                       std::to_string(options.regularization) + ")");
+                       format_number(options.regularization) + ")");
   auto ln = std::make_shared<LeastNorm>();
   const int m = basis_size();
   const int nc = static_cast<int>(constrained.size());

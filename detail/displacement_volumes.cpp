@@ -84,9 +84,28 @@ double prism_volume(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& 
   return m.dot((c0 - a0) + (c1 - a1) + (c2 - a2)) / 6;
 }
 
+void DisplacementVolumeOptions::validate() const {
+  const std::string who = "DisplacementVolumeOptions::";
+  const auto refuse = [&](const char* name, const char* range, double value) {
+    throw InvalidInput(who + name + " must be " + range + ", got " + format_number(value));
+  };
+  if (max_iterations < 0) refuse("max_iterations", ">= 0", max_iterations);
+  if (!(volume_tolerance >= 0) || !std::isfinite(volume_tolerance))
+    refuse("volume_tolerance", "finite and >= 0", volume_tolerance);
+  if (!(regularization >= 0) || !std::isfinite(regularization))
+    refuse("regularization", "finite and >= 0", regularization);
+  if (!(focal_fraction > 0))
+    refuse("focal_fraction", "> 0 (infinity disables the fold guard)", focal_fraction);
+  if (!(max_height_change > 0)) refuse("max_height_change", "> 0 (infinity disables it)", max_height_change);
+  if (!(max_volume_change > 0)) refuse("max_volume_change", "> 0 (infinity disables it)", max_volume_change);
+  if (!(relaxation > 0 && relaxation < 2)) refuse("relaxation", "in (0, 2)", relaxation);
+}
+
 DisplacementVolumes::DisplacementVolumes(const DisplacementVolumeOptions& options,
                                          const NormalDisplacementOptions& normal_options)
-    : options_(options), normal_(normal_options) {}
+    : options_(options), normal_(normal_options) {
+  options_.validate();  // here, not in encode(): a bad value fails before the caller loaded a mesh
+}
 
 void DisplacementVolumes::base_frames(const Positions& B) {
   normal_.base_points(B, b_);
@@ -251,13 +270,6 @@ void DisplacementVolumes::sweep(const Eigen::VectorXd& h, Eigen::VectorXd& next,
 void DisplacementVolumes::encode(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) {
   const char* where = "DisplacementVolumes::encode";
   const auto& o = options_;
-  auto bad = [](double x) { return !(x >= 0) || !std::isfinite(x); };
-  if (o.max_iterations < 0 || bad(o.volume_tolerance) || bad(o.regularization) || !(o.focal_fraction > 0) ||
-      !(o.max_volume_change > 0) || !(o.max_height_change > 0) || !(o.relaxation > 0 && o.relaxation < 2))
-    throw InvalidInput(
-        std::string(where) +
-        ": options need max_iterations >= 0, finite, non-negative volume_tolerance and "
-        "regularization, focal_fraction, max_height_change and max_volume_change > 0, relaxation in (0, 2)");
   check_faces(Fs, S.rows(), where, "S");
   check_faces(Fb, B.rows(), where, "B");
   check_finite(S, where, "S");

@@ -73,6 +73,8 @@ struct DisplacementVolumeOptions {
   //! wrinkling the detail surface instead (the top of a wrinkled prism is larger). > 0; infinity
   //! disables it.
   double max_volume_change = 0.5;
+  //! \throw InvalidInput naming the first option out of its range (above) as DisplacementVolumeOptions::NAME.
+  void validate() const;
 };
 
 //! Displacement-volume detail encoding ("volumes").

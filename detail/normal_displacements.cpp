@@ -9,6 +9,7 @@
 
 #include "msdeform/core/adjacency.h"
 #include "msdeform/core/errors.h"
+#include "msdeform/core/extent.h"
 #include "msdeform/core/parallel.h"
 #include "msdeform/core/vector_kernels.h"
 #include "msdeform/detail/closest_point.h"
@@ -229,14 +230,21 @@ MSD_AVX2 void reconstruct_samples_x4(const Sample* samples, long begin, long end
 
 }  // namespace
 
-NormalDisplacements::NormalDisplacements(const NormalDisplacementOptions& options) : options_(options) {}
+void NormalDisplacementOptions::validate() const {
+  const std::string who = "NormalDisplacementOptions::";
+  if (max_iterations < 0)
+    throw InvalidInput(who + "max_iterations must be >= 0, got " + std::to_string(max_iterations));
+  if (max_walks < 0) throw InvalidInput(who + "max_walks must be >= 0, got " + std::to_string(max_walks));
+  if (!(tolerance > 0) || !std::isfinite(tolerance))
+    throw InvalidInput(who + "tolerance must be finite and > 0, got " + format_number(tolerance));
+}
+
+NormalDisplacements::NormalDisplacements(const NormalDisplacementOptions& options) : options_(options) {
+  options_.validate();  // here, not in encode(): a bad value fails before the caller loaded a mesh
+}
 
 void NormalDisplacements::encode(const Positions& S, const Faces& Fs, const Positions& B, const Faces& Fb) {
   const char* where = "NormalDisplacements::encode";
-  if (options_.max_iterations < 0 || options_.max_walks < 0 || !(options_.tolerance > 0) ||
-      !std::isfinite(options_.tolerance))
-    throw InvalidInput(std::string(where) +
-                       ": options need max_iterations >= 0, max_walks >= 0 and a finite tolerance > 0");
   if (Fb.rows() == 0) throw InvalidInput(std::string(where) + ": the base mesh B has no face");
   check_faces(Fb, B.rows(), where, "B");
   check_finite(S, where, "S");
@@ -451,8 +459,7 @@ std::vector<std::string> NormalDisplacements::encode_warnings() const {
           " vertices a frame reconstructs found no base point along the base's normals (Newton did not "
           "converge) and were encoded "
           "from their closest point on B, so the details there are not reproduced exactly (vertices " +
-          ids + (fallback.size() > 5 ? ", ..." : "") +
-          "); a smoother base (a larger detail scale) usually removes them"};
+          ids + (fallback.size() > 5 ? ", ..." : "") + "); " + kNewtonFallbackRemedy};
 }
 
 }  // namespace msd

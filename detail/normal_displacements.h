@@ -15,6 +15,10 @@
 namespace msd {
 
 //! Settings of the Newton search for base points.
+//! The remedy that ends encode_warnings()'s line: a caller that knows better (the details already fold over
+//! the base, where a larger detail scale makes it worse) replaces it.
+constexpr const char* kNewtonFallbackRemedy = "a smoother base (a larger detail scale) usually removes them";
+
 struct NormalDisplacementOptions {
   //! Newton steps per vertex (a step that walks to a neighbouring triangle is counted as a walk instead).
   int max_iterations = 20;
@@ -22,6 +26,9 @@ struct NormalDisplacementOptions {
   double tolerance = 1e-12;
   //! Walks from a triangle to its neighbour per vertex before the search gives up.
   int max_walks = 64;
+  //! \throw InvalidInput naming the first option out of its range (max_iterations and max_walks >= 0, a
+  //! finite tolerance > 0) as NormalDisplacementOptions::NAME.
+  void validate() const;
 };
 
 //! Normal-displacement detail encoding ("normal"). encode() finds, for every vertex p of S, a point b

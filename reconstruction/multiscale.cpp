@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstring>
 
 #include "msdeform/core/errors.h"
 #include "msdeform/core/extent.h"
@@ -87,7 +88,16 @@ void MultiscaleDeformer::do_prepare(const Positions& S, const Faces& F, const Re
   if (!d.base_is_input) {
     progress(name_ + ": encoding the details (" + encoding_->name() + ")");
     encoding_->encode(S, F, d.base, d.base_faces);  // D = S ⊖ B
-    for (const std::string& w : encoding_->encode_warnings()) prepare_warnings_.push_back(name_ + ": " + w);
+    for (std::string w : encoding_->encode_warnings()) {
+      // Where decompose warned that the details fold over the base (too tall for its curvature), a larger
+      // detail scale makes them taller still: its own remedy, said with that warning, applies (fourth break
+      // test: the two lines advised a smaller and a larger scale).
+      if (const size_t at = w.find(kNewtonFallbackRemedy);
+          at != std::string::npos && d.report.check.folding_vertices > 0)
+        w.replace(at, std::strlen(kNewtonFallbackRemedy),
+                  "they lie where the details fold over the base, as decompose warned: its remedy applies");
+      prepare_warnings_.push_back(name_ + ": " + w);
+    }
   }
   edit_deformed_ = d.edit;
   base_deformed_ = d.base;

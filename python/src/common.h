@@ -46,7 +46,8 @@ void warn(const std::vector<std::string>& messages);
 std::string fspath(py::handle path, const char* what = "path");
 // FileNotFoundError / IsADirectoryError unless path names an existing file.
 void require_file(const std::string& path);
-// FileNotFoundError / NotADirectoryError / PermissionError unless path's folder exists and is writable.
+// FileNotFoundError / NotADirectoryError / PermissionError unless path's folder exists and is writable and
+// path is not a read-only file (which an atomic write would replace).
 void require_writable(const std::string& path);
 
 // (N, 3) numeric array-like -> Positions (a copy). rows >= 0: N must equal it (one per `per`). \throw TypeError for a

@@ -40,6 +40,13 @@ std::string in_python_terms(std::string message) {
   static const std::pair<const char*, const char*> kTerms[] = {
       {"load_mesh", "read_mesh"},
       {"load_soup", "read_soup"},
+      {"save_mesh", "write_mesh"},
+      {"NormalDisplacementOptions::max_iterations", "normal_iterations"},
+      {"NormalDisplacementOptions::tolerance", "normal_tolerance"},
+      {"NormalDisplacementOptions::", ""},
+      {"DisplacementVolumeOptions::max_iterations", "volume_iterations"},
+      {"DisplacementVolumeOptions::regularization", "volume_regularization"},
+      {"DisplacementVolumeOptions::", ""},
       {"arap: max_iterations", "arap: iterations"},
       {"primo: max_iterations", "primo: iterations"},
       {"--remesh-base", "remesh_edge_length"},
@@ -190,6 +197,14 @@ void require_writable(const std::string& path) {
   if (!fs::exists(status)) raise_os_error(ENOENT, folder);
   if (!fs::is_directory(status)) raise_os_error(ENOTDIR, folder);
   if (::access(folder.c_str(), W_OK | X_OK) != 0) raise_os_error(EACCES, folder);
+  // A read-only file is meant to stay, as the command line's outputs (fourth break test: write_mesh replaced
+  // a 0444 file; root may write anything, so the mode bits are read too).
+  const fs::file_status file = fs::status(path, ec);
+  if (fs::exists(file) &&
+      (::access(path.c_str(), W_OK) != 0 ||
+       (file.permissions() & fs::perms::all &
+        (fs::perms::owner_write | fs::perms::group_write | fs::perms::others_write)) == fs::perms::none))
+    raise_os_error(EACCES, path);
 }
 
 msd::Positions to_positions(py::handle obj, const char* what, long rows, const char* per) {

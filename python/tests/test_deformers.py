@@ -130,7 +130,7 @@ def test_options_configure_the_method(lift):
         short.deform(lift.transforms)
     report = short.frame_report
     assert report.iterations == 2 and not report.converged and report.residual > 0
-    assert report.warnings and "raise the iteration limit" in report.warnings[0]
+    assert report.warnings and "raise its iteration limit" in report.warnings[0]
 
     ms = msdeform.Deformer("multiscale-normal", base_method="arap", iterations=3, detail_scale=0.3)
     assert ms.options["base_method"] == "arap" and ms.options["iterations"] == 3
@@ -213,7 +213,7 @@ def test_unknown_method_and_options_are_refused_by_name():
         msdeform.Deformer("arap", iterations=0)
     with pytest.raises(msdeform.InvalidInput, match=r"primo: iterations must be >= 1"):
         msdeform.Deformer("primo", iterations=0)
-    with pytest.raises(msdeform.InvalidInput, match=r"tolerance must be finite and >= 0 \(got -1\)"):
+    with pytest.raises(msdeform.InvalidInput, match=r"tolerance must lie in \[0, 1\], a fraction of the bounding-box diagonal \(got -1\)"):
         msdeform.Deformer("arap", tolerance=-1)
     # transfer takes a callable too, and the message says so.
     with pytest.raises(TypeError, match="option transfer must be 'linear', 'smoothstep' or a callable t.s., got int"):

@@ -73,6 +73,34 @@ def test_write_mesh_warns_when_an_stl_renumbers_the_vertices(tmp_path, lift):
         msdeform.write_mesh(tmp_path / "b.stl", W, G)
 
 
+def test_write_mesh_keeps_a_read_only_file(tmp_path, lift):
+    # Fourth break test: a 0444 file was replaced (the command line refuses read-only outputs).
+    path = tmp_path / "kept.off"
+    path.write_text("OFF\n0 0 0\n")
+    path.chmod(0o444)
+    with pytest.raises(PermissionError):
+        msdeform.write_mesh(path, lift.V, lift.F)
+    assert path.read_text() == "OFF\n0 0 0\n"
+
+
+def test_option_and_metric_messages_use_the_python_names(lift):
+    # Fourth break test: encoding options were refused only by prepare(), in C++ words; tolerances above 1
+    # (a fraction of the diagonal) stopped ARAP after one iteration as "converged"; detail_distortion without
+    # a fixed or handle vertex spoke of a fairing the user never called.
+    with pytest.raises(msdeform.InvalidInput, match=r"^relaxation must be in \(0, 2\), got 5$"):
+        msdeform.Deformer("multiscale-volumes", relaxation=5.0)
+    with pytest.raises(msdeform.InvalidInput, match=r"^normal_tolerance must be finite and > 0, got -1$"):
+        msdeform.Deformer("multiscale-normal", normal_tolerance=-1.0)
+    with pytest.raises(msdeform.InvalidInput, match=r"^volume_iterations must be >= 0, got -1$"):
+        msdeform.Deformer("multiscale-volumes", volume_iterations=-1)
+    with pytest.raises(msdeform.InvalidInput, match=r"tolerance must lie in \[0, 1\]"):
+        msdeform.Deformer("arap", tolerance=1e9)
+    with pytest.raises(msdeform.InvalidInput, match="^write_mesh: .*unknown format"):
+        msdeform.write_mesh("x.abc", lift.V, lift.F)
+    with pytest.raises(msdeform.InvalidInput, match="no fixed or handle vertex"):
+        msdeform.detail_distortion(lift.V, lift.V, lift.F, np.ones(len(lift.V), np.int32))
+
+
 def test_write_sel_refuses_a_skipped_handle_code(tmp_path):
     # Third break test: codes 0, 1, 3 were written, and every reader refused the file.
     with pytest.raises(msdeform.InvalidInput, match="handle 0 .selection code 2. has no vertex"):

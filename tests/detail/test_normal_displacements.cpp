@@ -392,10 +392,12 @@ TEST_CASE("normal displacements: bad use and bad input", "[detail][normal][bad-i
   nan_b(3, 0) = std::numeric_limits<double>::infinity();
   CHECK_THROWS_WITH(nd.reconstruct(nan_b, out), Contains("vertex 3"));
 
+  // A bad option is refused when the encoding is made, not after the caller loaded a mesh (fourth break test:
+  // Python's Deformer(...) took it and prepare() refused it in C++ words).
   NormalDisplacementOptions options;
   options.tolerance = 0;
-  NormalDisplacements strict(options);
-  CHECK_THROWS_AS(strict.encode(S, Fs, B, Fb), InvalidInput);
+  CHECK_THROWS_WITH(NormalDisplacements(options),
+                    Contains("NormalDisplacementOptions::tolerance must be finite and > 0, got 0"));
 }
 
 TEST_CASE("normal displacements: reconstruct allocates nothing once out is sized", "[detail][normal]") {

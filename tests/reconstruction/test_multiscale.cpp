@@ -329,6 +329,33 @@ TEST_CASE("multiscale: a faired base's fold warnings name the faired base's reme
                                                      !Contains("detail scale"));
 }
 
+TEST_CASE(
+    "multiscale: where the details fold at rest, the base-point fallback does not advise a larger scale",
+    "[reconstruction][multiscale][real]") {
+  // Fourth break test: CGAL's camel at detail scale 0.05 was told "use a smaller [detail scale]" by decompose
+  // and "a smoother base (a larger detail scale) usually removes them" by the normal displacements.
+  const Mesh camel = load_mesh(test::cgal_mesh("camel.off"));
+  const Positions P = positions(camel);
+  Region region(static_cast<int>(P.rows()));
+  std::vector<int> fixed;
+  for (int v = 0; v < P.rows(); ++v)
+    if (P(v, 2) < -0.3) fixed.push_back(v);
+  region.set_fixed(fixed);
+  region.set_handle({5000}, 0);
+  MultiscaleOptions o;
+  o.decomposition.low_pass.detail_scale = 0.05;
+  MultiscaleDeformer ms(o);
+  ms.prepare(camel, region);
+  REQUIRE(ms.decomposition_report().check.folding_vertices > 0);
+  bool fallbacks = false;
+  for (const std::string& w : ms.prepare_warnings()) {
+    INFO(w);
+    CHECK_THAT(w, !Contains("a larger detail scale"));
+    fallbacks = fallbacks || w.find("as decompose warned: its remedy applies") != std::string::npos;
+  }
+  CHECK(fallbacks);
+}
+
 TEST_CASE("multiscale: the survey cylinder keeps its radius in the base (fairing shrank it to 0.066)",
           "[reconstruction][multiscale][real]") {
   const std::string base = test::shared_data("survey/cylinder");

@@ -130,57 +130,52 @@ void handle_span_warnings(const std::vector<Mat4>& transforms, const std::vector
     const Vec3 sigma = Eigen::JacobiSVD<Mat3>(A).singularValues();
     // Mirrors, flattening and half turns: handle_transform_warnings says what they do.
     if (!(A.determinant() > 0) || !(sigma(2) > 1e-6 * sigma(0)) || turn_degrees(A) > 179.9) continue;
+    // The directions the vertices do not spread in: variances at most kUnspread of the total (a spread
+    // below 1e-3 of the handle's size), or every direction for a handle at one point.
+    constexpr double kUnspread = 1e-6;
     const double size = C.trace();  // the mean squared distance of the vertices from their centroid
+    const Eigen::SelfAdjointEigenSolver<Mat3> axes(C);
+    Mat3 unspread = Mat3::Zero();
+    int spread = 0;
+    for (int i = 0; i < 3; ++i)
+      if (size > 0 && axes.eigenvalues()(i) > kUnspread * size)
+        ++spread;
+      else
+        unspread += axes.eigenvectors().col(i) * axes.eigenvectors().col(i).transpose();
+    if (spread == 3) continue;
+    // The turn the moved vertices show (Procrustes), the least one where they leave it open.
     Mat3 R = Mat3::Identity();
-    double s = 1;
     if (size > 0) {
-      const Eigen::JacobiSVD<Mat3> fit(A * C + 1e-4 * size * Mat3::Identity(),
+      const Eigen::JacobiSVD<Mat3> fit(A * C + kUnspread * size * Mat3::Identity(),
                                        Eigen::ComputeFullU | Eigen::ComputeFullV);
       Mat3 D = Mat3::Identity();
       D(2, 2) = (fit.matrixU() * fit.matrixV().transpose()).determinant() < 0 ? -1 : 1;
       R = fit.matrixU() * D * fit.matrixV().transpose();
-      s = (R.transpose() * A * C).trace() / size;
-      if (!(s > 0)) s = 1;
     }
-    const Mat3 L = A - s * R;
-    const double lost = L.norm() / std::sqrt(3.0);  // RMS change of a unit length over directions
-    if (!(lost > 0.02)) continue;
-    // How much of that moves the vertices: against a handle as large in every direction.
-    const double shown =
-        size > 0 ? std::sqrt(std::max(0.0, (L * C * L.transpose()).trace()) / (L.squaredNorm() * size / 3))
-                 : 0;
-    if (!(shown < 0.1)) continue;
-    const Vec3 extent =
-        Eigen::SelfAdjointEigenSolver<Mat3>(C).eigenvalues().cwiseMax(0).cwiseSqrt();  // ascending
-    const int spans = size > 0 ? static_cast<int>((extent.array() > 0.1 * extent(2)).count()) : 0;
-    const char* where = spans == 0   ? "they all lie at one point"
-                        : spans == 1 ? "they lie near a line"
-                        : spans == 2 ? "they lie near a plane"
-                                     : "they lie near a line or plane";
-    // What the vertices leave out, R^T A / s: a turn where it is one (equal singular values), else a scale or
-    // shear.
-    const Mat3 left_out = R.transpose() * A / s;
+    // What the transform does beyond that turn in those directions: placing methods leave it out.
+    const Mat3 L = (A - R) * unspread;
+    const double change = Eigen::JacobiSVD<Mat3>(L).singularValues()(0);  // per unit length
+    if (!(change > 0.02)) continue;
+    const char* where = spread == 0   ? "they all lie at one point"
+                        : spread == 1 ? "they lie on a line"
+                                      : "they lie in a plane";
+    // A turn where R^T A is one (equal singular values), else a scale or shear.
+    const Mat3 left_out = R.transpose() * A;
     const Vec3 stretch = Eigen::JacobiSVD<Mat3>(left_out).singularValues();
     const double turn = stretch(0) < 1.02 * stretch(2) ? turn_degrees(left_out) : 0;
-    char change[200];
+    char what[200];
     if (turn > 1)
-      std::snprintf(change, sizeof change, "a turn of %.3g degrees", turn);
+      std::snprintf(what, sizeof what, "a turn of %.3g degrees", turn);
     else
-      std::snprintf(change, sizeof change, "a scale or shear (lengths change by up to %.3g %%)",
-                    100 * Eigen::JacobiSVD<Mat3>(L).singularValues()(0));
-    char moves[120] = "moves none of them";
-    if (shown > 1e-3)
-      std::snprintf(moves, sizeof moves,
-                    "moves them by %.2g %% of what it would move a handle spread in every direction",
-                    100 * shown);
+      std::snprintf(what, sizeof what, "a scale or shear (lengths change by up to %.3g %%)", 100 * change);
     char text[800];
     std::snprintf(
         text, sizeof text,
-        "%s%s%zu changes it where its vertices do not spread (%s): %s that %s. Methods that place "
-        "vertices (shell, arap, primo, laplacian, multi-scale over them, the space methods) leave that "
-        "part out, methods that blend transforms (gradient, propagate) apply it to the free region; "
-        "select a handle whose vertices spread around that point, line or plane",
-        who.c_str(), kHandleTransformWarning, k, where, change, moves);
+        "%s%s%zu changes it where its vertices do not spread (%s): %s that moves none of them. "
+        "Methods that place vertices (shell, arap, primo, laplacian, multi-scale over them, the space "
+        "methods) leave that part out, methods that blend transforms (gradient, propagate) apply it to "
+        "the free region; select a handle whose vertices spread around that point, line or plane",
+        who.c_str(), kHandleTransformWarning, k, where, what);
     warnings.emplace_back(text);
   }
 }

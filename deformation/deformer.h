@@ -229,14 +229,13 @@ void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::s
 //! centroid (3×3: the mean of (p − c)(p − c)ᵀ), zero for a handle whose vertices all lie within 1e-9 of P's
 //! bounding-box diagonal of one point: what handle_span_warnings compares a transform with.
 std::vector<Mat3> handle_scatters(const Positions& P, const Region& region);
-//! Appends a warning for each handle whose transform changes it in directions its vertices do not (or
-//! hardly) span, so that the change hardly moves them (third and fourth break tests: a one-vertex handle
-//! turned 170°, a cap scaled along its normal, a row of vertices twisted about itself left shell's and
-//! ARAP's result at rest without a word, while gradient editing and propagation deformed the free region).
-//! The part the vertices show is the similarity s·R fitted to the handle's moved vertices (Procrustes,
-//! regularised towards the least turn where they do not fix it); the rest, L = A − s·R (A the transform's
-//! 3×3 part), is warned of when it changes lengths by over 2 % (RMS over directions) and moves the vertices
-//! by under a tenth of what it would move a handle as large in every direction. Methods that place vertices
+//! Appends a warning for each handle whose transform changes it in directions its vertices do not spread
+//! in (a variance at most 1e-6 of the handle's total: a spread below 1e-3 of its size), so that the change
+//! moves none of them (third and fourth break tests: a one-vertex handle turned 170°, a flat cap scaled
+//! along its normal, a row of vertices twisted about itself left shell's and ARAP's result at rest without a
+//! word, while gradient editing and propagation deformed the free region). The turn the moved vertices show
+//! is fitted (Procrustes, the least turn where they leave it open); what the transform does beyond it in
+//! those directions is warned of when it changes a length there by over 2 %. Methods that place vertices
 //! see only the vertices' targets; methods that blend the transform (gradient, propagate) apply all of it.
 //! Reflections, singular transforms and half turns are left to handle_transform_warnings. O(1) per handle;
 //! allocates only for a warning.

@@ -172,6 +172,8 @@ DetailDistortionMetric::DetailDistortionMetric(const Positions& rest, const Face
   if (region.num_vertices() != rest.rows())
     throw InvalidInput(std::string(who) + ": region has " + std::to_string(region.num_vertices()) +
                        " vertices but the mesh has " + std::to_string(rest.rows()));
+  if (F.rows() == 0)  // (fifth break test: the fairing underneath blamed the region)
+    throw InvalidInput(std::string(who) + ": there are no faces; the details are measured over the surface");
   free_ = region.free_vertices();
   if (free_.empty())
     throw InvalidInput(std::string(who) + ": the region has no free vertex to measure details on");

@@ -745,6 +745,7 @@ void offset_kdop_cage(const Positions& P, double margin, int subdivisions, Posit
 CageDeformer::CageDeformer(CageOptions options) : options_(std::move(options)) {
   const char* who = "cage";
   name_ = options_.coordinates == CageCoordinates::MeanValue ? "cage-mvc" : "cage-harmonic";
+  options_.least_norm.validate(name_);  // here, not in prepare() (fifth break test)
   if (!(options_.margin > 0 && options_.margin <= 10))
     throw InvalidInput(std::string(who) + ": margin must be in (0, 10] (got " +
                        format_number(options_.margin) + ")");

@@ -10,6 +10,7 @@
 namespace msd {
 
 LatticeDeformer::LatticeDeformer(LatticeOptions options) : options_(options) {
+  options_.least_norm.validate("lattice");  // here, not in prepare() (fifth break test)
   const auto count = [](int c) { return std::to_string(c); };
   const Eigen::Vector3i& c = options_.cells;
   // A count of 0 beside others (0, 2, 2) was refused later as "give all three cell counts or none".

@@ -50,11 +50,15 @@ Positions SpaceDeformer::control_points() const {
   throw UsageError(name() + " has no control points: its coefficients are not displacements of points");
 }
 
+void LeastNormOptions::validate(const std::string& who) const {
+  if (!(regularization > 0) || !std::isfinite(regularization))
+    throw InvalidInput(who + ": the least-norm regularization must be positive and finite (got " +
+                       format_number(regularization) + ")");
+}
+
 void SpaceDeformer::prepare_solve(const Positions& P, const std::vector<int>& constrained) {
   const LeastNormOptions options = least_norm_options();
-  if (!(options.regularization > 0) || !std::isfinite(options.regularization))
-    throw InvalidInput(name() + ": the least-norm regularisation must be positive and finite (got " +
-                       format_number(options.regularization) + ")");
+  options.validate(name());
   auto ln = std::make_shared<LeastNorm>();
   const int m = basis_size();
   const int nc = static_cast<int>(constrained.size());

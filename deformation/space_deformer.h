@@ -48,6 +48,8 @@ struct LeastNormOptions {
   //! them more closely but amplify constraints that conflict within one basis function's support (a
   //! frame warns when some point then moves more than twice as far as any target).
   double regularization = 1e-6;
+  //! \throw InvalidInput, prefixed with who, unless regularization is positive and finite.
+  void validate(const std::string& who) const;
 };
 
 //! Base of the space methods. Subclasses define the basis functions (fit_basis, basis) and, unless the

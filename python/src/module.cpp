@@ -41,6 +41,7 @@ std::string in_python_terms(std::string message) {
       {"load_mesh", "read_mesh"},
       {"load_soup", "read_soup"},
       {"save_mesh", "write_mesh"},
+      {"propagate: custom_transfer(", "propagate: transfer("},
       {"NormalDisplacementOptions::max_iterations", "normal_iterations"},
       {"NormalDisplacementOptions::tolerance", "normal_tolerance"},
       {"NormalDisplacementOptions::", ""},
@@ -474,11 +475,13 @@ return_report=True also the report dict. Raises FileNotFoundError, msdeform.Inva
         // As the command line warns of an STL output (third break test: silent in Python).
         if (const msd::StlReadBack back = msd::stl_read_back(P, T); back.renumbered)
           warn({"write_mesh: " + p + ": STL keeps no vertex list, so the file reads back with " +
-                std::to_string(back.vertices) + " of the " + std::to_string(P.rows()) +
-                " vertices numbered by first use in a face (" + std::to_string(back.unused) +
-                " that no face uses lost, " + std::to_string(back.merged) +
-                " at the point of another joined); labels made for V select other vertices of it. .ply, "
-                ".off and .obj keep the vertices as they are"});
+                (back.unused + back.merged == 0
+                     ? std::string("its vertices renumbered")
+                     : std::to_string(back.vertices) + " of the " + std::to_string(P.rows()) + " vertices (" +
+                           std::to_string(back.unused) + " that no face uses lost, " +
+                           std::to_string(back.merged) + " at the point of another joined), numbered") +
+                " by first use in a face; labels made for V select other vertices of it. .ply, .off and .obj "
+                "keep the vertices as they are"});
       },
       py::arg("path"), py::arg("V"), py::arg("F") = py::none(), py::arg("scalar") = py::none(),
       py::arg("scalar_name") = "quality",

@@ -63,7 +63,7 @@ def test_write_mesh_scalar_property(tmp_path, lift):
 def test_write_mesh_warns_when_an_stl_renumbers_the_vertices(tmp_path, lift):
     # Third break test: an unused vertex was lost without a word (the command line warns).
     V = np.vstack([lift.V, [[9.0, 9.0, 9.0]]])
-    with pytest.warns(msdeform.MsdeformWarning, match=f"reads back with {len(lift.V)} of the {len(V)} vertices"):
+    with pytest.warns(msdeform.MsdeformWarning, match=f"reads back with {len(lift.V)} of the {len(V)} vertices \\(1 "):
         msdeform.write_mesh(tmp_path / "a.stl", V, lift.F)
     assert msdeform.read_mesh(tmp_path / "a.stl")[0].shape == lift.V.shape
     # What an STL gave back is written back without a warning.
@@ -99,6 +99,15 @@ def test_option_and_metric_messages_use_the_python_names(lift):
         msdeform.write_mesh("x.abc", lift.V, lift.F)
     with pytest.raises(msdeform.InvalidInput, match="no fixed or handle vertex"):
         msdeform.detail_distortion(lift.V, lift.V, lift.F, np.ones(len(lift.V), np.int32))
+    # Fifth break test: refused only by prepare(), and in C++ or unclear words.
+    with pytest.raises(msdeform.InvalidInput, match="lattice: the least-norm regularization must be positive"):
+        msdeform.Deformer("lattice", regularization=-1.0)
+    with pytest.raises(msdeform.InvalidInput, match="cage-mvc: the least-norm regularization must be positive"):
+        msdeform.Deformer("cage-mvc", regularization=float("nan"))
+    with pytest.raises(msdeform.InvalidInput, match="detail_distortion: there are no faces"):
+        msdeform.detail_distortion(lift.V, lift.V, None, lift.labels)
+    with pytest.raises(msdeform.InvalidInput, match=r"propagate: transfer\("):
+        msdeform.Deformer("propagate", transfer=lambda s: 2.0).prepare(lift.V, lift.F, lift.labels)
 
 
 def test_write_sel_refuses_a_skipped_handle_code(tmp_path):

@@ -295,6 +295,18 @@ TEST_CASE("multiscale: CGAL's cactus runs with the default base, and a collapsin
   }
 }
 
+namespace {
+// A region of P's vertices, those below `level` along coordinate `axis` fixed and the rest free.
+Region fixed_below(const Positions& P, int axis, double level) {
+  Region region(static_cast<int>(P.rows()));
+  std::vector<int> fixed;
+  for (int v = 0; v < P.rows(); ++v)
+    if (P(v, axis) < level) fixed.push_back(v);
+  region.set_fixed(fixed);
+  return region;
+}
+}  // namespace
+
 TEST_CASE("multiscale: a faired base's fold warnings name the faired base's remedies",
           "[reconstruction][multiscale][real]") {
   // Third break test: CGAL's elephant, feet fixed, the trunk's tip turned 150° over a minimum-variation base.
@@ -302,11 +314,7 @@ TEST_CASE("multiscale: a faired base's fold warnings name the faired base's reme
   // and the frame's fold warning advised a smaller detail scale, which a faired base does not have.
   const Mesh elephant = load_mesh(test::cgal_mesh("elephant.off"));
   const Positions P = positions(elephant);
-  Region region(static_cast<int>(P.rows()));
-  std::vector<int> feet;
-  for (int v = 0; v < P.rows(); ++v)
-    if (P(v, 1) < 0.3) feet.push_back(v);
-  region.set_fixed(feet);
+  Region region = fixed_below(P, 1, 0.3);  // the feet
   const Vec3 tip(0.18387, 0.5, 0.0894);
   region.set_handle(select_sphere(P, tip, 0.05), 0);
   Mat4 T = Mat4::Identity();
@@ -335,12 +343,7 @@ TEST_CASE(
   // Fourth break test: CGAL's camel at detail scale 0.05 was told "use a smaller [detail scale]" by decompose
   // and "a smoother base (a larger detail scale) usually removes them" by the normal displacements.
   const Mesh camel = load_mesh(test::cgal_mesh("camel.off"));
-  const Positions P = positions(camel);
-  Region region(static_cast<int>(P.rows()));
-  std::vector<int> fixed;
-  for (int v = 0; v < P.rows(); ++v)
-    if (P(v, 2) < -0.3) fixed.push_back(v);
-  region.set_fixed(fixed);
+  Region region = fixed_below(positions(camel), 2, -0.3);
   region.set_handle({5000}, 0);
   MultiscaleOptions o;
   o.decomposition.low_pass.detail_scale = 0.05;

@@ -113,6 +113,9 @@ put("stl", "huge_count.stl", b"x".ljust(80, b"\0") + struct.pack("<I", 0xFFFFFFF
 put("sel", "handles.sel", b"\x08" + b"# 8 vertices\n0\n0\n1\n1\n2\n2\n3\n3\n")
 put("sel", "cr_bom.sel", b"\x04\xef\xbb\xbf0\r1\r2\r1\r")
 put("sel", "huge_label.sel", b"\x02" + b"0\n2147483647\n")
+# A skipped handle code (0 1 3): read, but write_sel refuses it as validate() does (stop 60's fuzzer found it).
+put("sel", "skipped_code.sel", b"\x03" + b"0\n1\n3\n")
+put("dmat", "skipped_group.dmat", b"\x03" + b"1 3\n0\n-1\n2\n")
 put("sel", "wrong_count.sel", b"\x05" + b"0 1 2\n")
 put("sel", "empty.sel", b"\x00")
 

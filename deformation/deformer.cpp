@@ -104,45 +104,48 @@ void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::s
   }
 }
 
-std::vector<Mat3> handle_scatters(const Positions& P, const Region& region) {
+// A direction whose variance is at most this of a handle's total (a spread below 1e-3 of its size) is one its
+// vertices do not spread in; the turn fitted to them is pulled towards none as weakly.
+constexpr double kUnspread = 1e-6;
+
+std::vector<HandleSpread> handle_spreads(const Positions& P, const Region& region) {
   const int nh = region.num_handles();
   std::vector<Vec3> centroid(nh, Vec3::Zero());
   std::vector<int> count(nh, 0);
   for (int v = 0; v < region.num_vertices(); ++v)
     if (const int h = region.handle_of(v); h >= 0) centroid[h] += P.row(v).transpose(), ++count[h];
   for (int h = 0; h < nh; ++h) centroid[h] /= std::max(count[h], 1);
-  std::vector<Mat3> scatter(nh, Mat3::Zero());
+  std::vector<HandleSpread> spreads(nh);
   for (int v = 0; v < region.num_vertices(); ++v)
     if (const int h = region.handle_of(v); h >= 0) {
       const Vec3 d = P.row(v).transpose() - centroid[h];
-      scatter[h] += d * d.transpose() / count[h];
+      spreads[h].scatter += d * d.transpose() / count[h];
     }
   const double point = 1e-9 * bounding_box_diagonal(P);
-  for (Mat3& C : scatter)
-    if (!(C.trace() > point * point)) C.setZero();
-  return scatter;
+  for (HandleSpread& s : spreads) {
+    if (!(s.scatter.trace() > point * point)) s.scatter.setZero();
+    const double size = s.scatter.trace();
+    const Eigen::SelfAdjointEigenSolver<Mat3> axes(s.scatter);
+    s.spread = 0;
+    for (int i = 0; i < 3; ++i)
+      if (size > 0 && axes.eigenvalues()(i) > kUnspread * size)
+        ++s.spread;
+      else
+        s.unspread += axes.eigenvectors().col(i) * axes.eigenvectors().col(i).transpose();
+  }
+  return spreads;
 }
 
-void handle_span_warnings(const std::vector<Mat4>& transforms, const std::vector<Mat3>& scatters,
+void handle_span_warnings(const std::vector<Mat4>& transforms, const std::vector<HandleSpread>& spreads,
                           const std::string& who, std::vector<std::string>& warnings) {
-  for (size_t k = 0; k < scatters.size() && k < transforms.size(); ++k) {
-    const Mat3 A = transforms[k].topLeftCorner<3, 3>(), &C = scatters[k];
+  for (size_t k = 0; k < spreads.size() && k < transforms.size(); ++k) {
+    const HandleSpread& h = spreads[k];
+    if (h.spread == 3) continue;  // its vertices show every part of the transform
+    const Mat3 A = transforms[k].topLeftCorner<3, 3>(), &C = h.scatter;
     const Vec3 sigma = Eigen::JacobiSVD<Mat3>(A).singularValues();
     // Mirrors, flattening and half turns: handle_transform_warnings says what they do.
     if (!(A.determinant() > 0) || !(sigma(2) > 1e-6 * sigma(0)) || turn_degrees(A) > 179.9) continue;
-    // The directions the vertices do not spread in: variances at most kUnspread of the total (a spread
-    // below 1e-3 of the handle's size), or every direction for a handle at one point.
-    constexpr double kUnspread = 1e-6;
     const double size = C.trace();  // the mean squared distance of the vertices from their centroid
-    const Eigen::SelfAdjointEigenSolver<Mat3> axes(C);
-    Mat3 unspread = Mat3::Zero();
-    int spread = 0;
-    for (int i = 0; i < 3; ++i)
-      if (size > 0 && axes.eigenvalues()(i) > kUnspread * size)
-        ++spread;
-      else
-        unspread += axes.eigenvectors().col(i) * axes.eigenvectors().col(i).transpose();
-    if (spread == 3) continue;
     // The turn the moved vertices show (Procrustes), the least one where they leave it open.
     Mat3 R = Mat3::Identity();
     if (size > 0) {
@@ -153,12 +156,12 @@ void handle_span_warnings(const std::vector<Mat4>& transforms, const std::vector
       R = fit.matrixU() * D * fit.matrixV().transpose();
     }
     // What the transform does beyond that turn in those directions: placing methods leave it out.
-    const Mat3 L = (A - R) * unspread;
+    const Mat3 L = (A - R) * h.unspread;
     const double change = Eigen::JacobiSVD<Mat3>(L).singularValues()(0);  // per unit length
     if (!(change > 0.02)) continue;
-    const char* where = spread == 0   ? "they all lie at one point"
-                        : spread == 1 ? "they lie on a line"
-                                      : "they lie in a plane";
+    const char* where = h.spread == 0   ? "they all lie at one point"
+                        : h.spread == 1 ? "they lie on a line"
+                                        : "they lie in a plane";
     // A turn where R^T A is one (equal singular values), else a scale or shear.
     const Mat3 left_out = R.transpose() * A;
     const Vec3 stretch = Eigen::JacobiSVD<Mat3>(left_out).singularValues();
@@ -328,7 +331,7 @@ void Deformer::prepare(const Positions& P, const Faces& F, const Region& region)
   num_handles_ = region.num_handles();
   num_vertices_ = region.num_vertices();
   num_constrained_ = static_cast<int>(region.constrained_vertices().size());
-  handle_scatters_ = handle_scatters(P, region);
+  handle_spreads_ = handle_spreads(P, region);
   prepared_ = true;
 }
 
@@ -370,7 +373,7 @@ void Deformer::deform(const std::vector<Mat4>& transforms, Positions& out) {
   check_affine(transforms, name());
   do_deform(transforms, out);
   handle_transform_warnings(transforms, name(), frame_report_.warnings);
-  handle_span_warnings(transforms, handle_scatters_, name(), frame_report_.warnings);
+  handle_span_warnings(transforms, handle_spreads_, name(), frame_report_.warnings);
   end_frame(out);
 }
 

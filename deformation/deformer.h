@@ -51,6 +51,16 @@ struct DeformerTraits {
   bool cotan_laplacian = true;
 };
 
+//! How a handle's vertices spread at rest: their second moments about their centroid (3×3: the mean of
+//! (p − c)(p − c)ᵀ; zero when they all lie within 1e-9 of P's bounding-box diagonal of one point), the
+//! directions they do not spread in (variance at most 1e-6 of the total: a spread below 1e-3 of the
+//! handle's size; every direction for a handle at one point) as a projector, and how many they do spread in.
+struct HandleSpread {
+  Mat3 scatter = Mat3::Zero();
+  Mat3 unspread = Mat3::Zero();
+  int spread = 3;
+};
+
 //! What the last frame measured about its own result: a frame never returns a result that was not
 //! checked. Fields a method does not measure keep their defaults.
 struct FrameReport {
@@ -177,7 +187,7 @@ class Deformer {
   bool prepare_failed_ = false;         // the last prepare() threw (a frame's error says so)
   bool output_checked_finite_ = false;  // set_output_checked_finite() in this frame
   int num_handles_ = 0, num_vertices_ = 0, num_constrained_ = 0;
-  std::vector<Mat3> handle_scatters_;  // of the prepared region, for handle_span_warnings
+  std::vector<HandleSpread> handle_spreads_;  // of the prepared region, for handle_span_warnings
 };
 
 //! A deformer whose solver works in the shape's centred, normalised frame (LocalFrame), for methods whose
@@ -225,10 +235,8 @@ constexpr const char* kHandleTransformWarning = ": the transform of handle ";
 void handle_transform_warnings(const std::vector<Mat4>& transforms, const std::string& who,
                                std::vector<std::string>& warnings);
 
-//! Per handle of region (validated against P, #V×3), the second moments of its vertices about their
-//! centroid (3×3: the mean of (p − c)(p − c)ᵀ), zero for a handle whose vertices all lie within 1e-9 of P's
-//! bounding-box diagonal of one point: what handle_span_warnings compares a transform with.
-std::vector<Mat3> handle_scatters(const Positions& P, const Region& region);
+//! One HandleSpread per handle of region (validated against P, #V×3), for handle_span_warnings.
+std::vector<HandleSpread> handle_spreads(const Positions& P, const Region& region);
 //! Appends a warning for each handle whose transform changes it in directions its vertices do not spread
 //! in (a variance at most 1e-6 of the handle's total: a spread below 1e-3 of its size), so that the change
 //! moves none of them (third and fourth break tests: a one-vertex handle turned 170°, a flat cap scaled
@@ -237,9 +245,9 @@ std::vector<Mat3> handle_scatters(const Positions& P, const Region& region);
 //! is fitted (Procrustes, the least turn where they leave it open); what the transform does beyond it in
 //! those directions is warned of when it changes a length there by over 2 %. Methods that place vertices
 //! see only the vertices' targets; methods that blend the transform (gradient, propagate) apply all of it.
-//! Reflections, singular transforms and half turns are left to handle_transform_warnings. O(1) per handle;
-//! allocates only for a warning.
-void handle_span_warnings(const std::vector<Mat4>& transforms, const std::vector<Mat3>& scatters,
+//! Reflections, singular transforms and half turns are left to handle_transform_warnings. O(1) per handle,
+//! nothing for a handle spread in every direction; allocates only for a warning.
+void handle_span_warnings(const std::vector<Mat4>& transforms, const std::vector<HandleSpread>& spreads,
                           const std::string& who, std::vector<std::string>& warnings);
 
 //! Throws InvalidInput unless every transform is finite with last row (0 0 0 1); `who` prefixes the message.

@@ -498,7 +498,7 @@ TEST_CASE("conformance: thin real handles turned rigidly are not said to hide th
   // the fit's pull towards no turn was 1e-4 of the handle's size squared, 8 % of the strip's width squared.
   const auto said = [](const Positions& P, const Region& region, const Mat4& T) {
     std::vector<std::string> warnings;
-    handle_span_warnings({T}, handle_scatters(P, region), "t", warnings);
+    handle_span_warnings({T}, handle_spreads(P, region), "t", warnings);
     return warnings;
   };
   const auto turn_about_centroid = [](const Positions& P, const std::vector<int>& vertices, const Vec3& axis,
